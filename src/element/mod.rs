@@ -1,0 +1,2 @@
+//! Element geometry, computed once in the reference configuration.
+pub mod hex8;

@@ -1,0 +1,75 @@
+//! One error type for the library. Every input error names its file and the line or
+//! the field; a run that goes wrong names the step, time and element.
+
+use std::fmt;
+use std::path::PathBuf;
+
+/// Where in an input something is wrong.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Location {
+    None,
+    Line(usize),
+    Field(String),
+    LineField(usize, String),
+}
+
+#[derive(Debug)]
+pub enum Error {
+    /// Malformed or inconsistent input.
+    Input { file: String, location: Location, message: String },
+    /// Reading or writing a file failed.
+    Io { path: PathBuf, source: std::io::Error },
+    /// The requested time step exceeds the critical one.
+    UnstableTimeStep { dt: f64, critical: f64, element: usize, element_estimate: f64 },
+    /// The explicit run diverged.
+    Diverged { step: usize, time: f64, element: Option<usize>, node: Option<usize>, reason: String },
+    /// The static solver did not converge.
+    NotConverged(String),
+}
+
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    pub fn input(file: impl Into<String>, location: Location, message: impl Into<String>) -> Self {
+        Error::Input { file: file.into(), location, message: message.into() }
+    }
+    pub fn field(file: impl Into<String>, field: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::Input { file: file.into(), location: Location::Field(field.into()), message: message.into() }
+    }
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io { path: path.into(), source }
+    }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::Input { file, location, message } => match location {
+                Location::None => write!(f, "{file}: {message}"),
+                Location::Line(l) => write!(f, "{file}:{l}: {message}"),
+                Location::Field(k) => write!(f, "{file}: field `{k}`: {message}"),
+                Location::LineField(l, k) => write!(f, "{file}:{l}: field `{k}`: {message}"),
+            },
+            Error::Io { path, source } => write!(f, "{}: {source}", path.display()),
+            Error::UnstableTimeStep { dt, critical, element, element_estimate } => write!(
+                f,
+                "time step {dt:.4e} s exceeds the critical time step {critical:.4e} s (2/omega_max of M^-1 K); \
+                 the limiting element is {element} (its own estimate {element_estimate:.4e} s). \
+                 Use a time step of at most {critical:.4e} s, or pass --force-dt to run anyway"
+            ),
+            Error::Diverged { step, time, element, node, reason } => {
+                write!(f, "run diverged at step {step} (t = {time:.6e} s)")?;
+                if let Some(e) = element {
+                    write!(f, ", element {e}")?;
+                }
+                if let Some(n) = node {
+                    write!(f, ", node {n}")?;
+                }
+                write!(f, ": {reason}")
+            }
+            Error::NotConverged(m) => write!(f, "static solver did not converge: {m}"),
+        }
+    }
+}
+
+impl std::error::Error for Error {}

@@ -1,0 +1,161 @@
+//! Atomic file writes: write to a temporary sibling file, flush + fsync it, then
+//! rename it over the target. A reader (or a crash at any point) therefore sees
+//! either the old complete file or the new complete file, never a half-written one.
+
+use std::fs::{self, File, OpenOptions};
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// Temporary sibling path `.{filename}.tmp-{pid}` in the same directory as `path`
+/// (same directory => same filesystem => `rename` is atomic).
+fn temp_path(path: &Path) -> io::Result<PathBuf> {
+    let name = path.file_name().ok_or_else(|| {
+        io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("write_atomic: path {} has no file name", path.display()),
+        )
+    })?;
+    let mut tmp_name = std::ffi::OsString::from(".");
+    tmp_name.push(name);
+    tmp_name.push(format!(".tmp-{}", std::process::id()));
+    Ok(path.with_file_name(tmp_name))
+}
+
+/// Best-effort fsync of the directory containing `path`, so the rename itself is
+/// durable. Ignored where directories cannot be opened/synced (e.g. Windows).
+fn sync_parent_dir(path: &Path) {
+    #[cfg(unix)]
+    {
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        if let Ok(d) = File::open(dir) {
+            let _ = d.sync_all();
+        }
+    }
+    #[cfg(not(unix))]
+    let _ = path;
+}
+
+/// Atomically replace `path` with `bytes`.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    write_atomic_with(path, |w| w.write_all(bytes))
+}
+
+/// Atomically replace `path` with whatever `f` writes. `f` writes into a
+/// buffered temporary file; if `f` (or flushing/syncing) fails, the temporary
+/// file is removed and the target is left untouched.
+pub fn write_atomic_with<F>(path: &Path, f: F) -> io::Result<()>
+where
+    F: FnOnce(&mut dyn Write) -> io::Result<()>,
+{
+    let tmp = temp_path(path)?;
+    let result = (|| {
+        let file = OpenOptions::new()
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .open(&tmp)?;
+        let mut w = BufWriter::with_capacity(1 << 16, file);
+        f(&mut w)?;
+        let file = w.into_inner().map_err(|e| e.into_error())?;
+        file.sync_all()?;
+        drop(file);
+        fs::rename(&tmp, path)
+    })();
+    match result {
+        Ok(()) => {
+            sync_parent_dir(path);
+            Ok(())
+        }
+        Err(e) => {
+            let _ = fs::remove_file(&tmp);
+            Err(e)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch_dir(tag: &str) -> PathBuf {
+        let d =
+            std::env::temp_dir().join(format!("sticky_lips_atomic_{}_{}", tag, std::process::id()));
+        let _ = fs::remove_dir_all(&d);
+        fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    fn leftovers(dir: &Path) -> Vec<String> {
+        fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.contains(".tmp-"))
+            .collect()
+    }
+
+    #[test]
+    fn temp_name_is_hidden_sibling() {
+        let t = temp_path(Path::new("/a/b/out.vtu")).unwrap();
+        assert_eq!(
+            t,
+            PathBuf::from(format!("/a/b/.out.vtu.tmp-{}", std::process::id()))
+        );
+        assert!(temp_path(Path::new("/")).is_err());
+    }
+
+    #[test]
+    fn writes_and_overwrites() {
+        let d = scratch_dir("overwrite");
+        let p = d.join("x.txt");
+        write_atomic(&p, b"first version, long").unwrap();
+        assert_eq!(fs::read(&p).unwrap(), b"first version, long");
+        write_atomic(&p, b"second").unwrap();
+        assert_eq!(fs::read(&p).unwrap(), b"second");
+        assert!(leftovers(&d).is_empty());
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn streaming_writer() {
+        let d = scratch_dir("stream");
+        let p = d.join("big.bin");
+        let expected: Vec<u8> = (0..300_000u32).map(|i| (i % 251) as u8).collect();
+        write_atomic_with(&p, |w| {
+            for chunk in expected.chunks(1000) {
+                w.write_all(chunk)?;
+            }
+            Ok(())
+        })
+        .unwrap();
+        assert_eq!(fs::read(&p).unwrap(), expected);
+        assert!(leftovers(&d).is_empty());
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn failure_keeps_old_file_and_cleans_temp() {
+        let d = scratch_dir("fail");
+        let p = d.join("keep.txt");
+        write_atomic(&p, b"old").unwrap();
+        let err = write_atomic_with(&p, |w| {
+            w.write_all(b"partial new content")?;
+            Err(io::Error::other("simulated crash"))
+        })
+        .unwrap_err();
+        assert_eq!(err.to_string(), "simulated crash");
+        assert_eq!(fs::read(&p).unwrap(), b"old");
+        assert!(leftovers(&d).is_empty());
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn missing_directory_is_an_error() {
+        let d = scratch_dir("missing");
+        let p = d.join("no_such_dir").join("f.txt");
+        assert!(write_atomic(&p, b"x").is_err());
+        fs::remove_dir_all(&d).unwrap();
+    }
+}

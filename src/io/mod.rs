@@ -1,0 +1,3 @@
+pub mod atomic;
+pub mod vtu;
+pub mod niftysim;

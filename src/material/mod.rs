@@ -1,0 +1,4 @@
+//! Constitutive models.
+pub mod neo_hookean;
+
+pub use neo_hookean::NeoHookean;

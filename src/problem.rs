@@ -1,0 +1,190 @@
+//! The problem a run solves, independent of the input format: mesh, materials,
+//! boundary conditions, time stepping and numerical options. SI units throughout;
+//! readers in `io` convert on the way in.
+
+use crate::element::hex8::GradientVariant;
+use crate::error::{Error, Location, Result};
+use crate::material::NeoHookean;
+use crate::mesh::Mesh;
+use crate::tled::boundary::BoundaryConditions;
+
+/// A material assigned to a set of elements.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaterialSpec {
+    pub name: String,
+    pub law: NeoHookean,
+    /// Mass density `rho` (kg/m^3).
+    pub density: f64,
+}
+
+/// Time stepping.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TimeSettings {
+    /// Time step `dt` (s).
+    pub dt: f64,
+    /// Simulated duration `T` (s).
+    pub total_time: f64,
+    /// Write a frame every this many steps.
+    pub output_every: usize,
+}
+
+/// Numerical options of the TLED scheme.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Numerics {
+    /// Mass-proportional damping coefficient `alpha` (1/s): damping matrix `alpha M`.
+    pub damping: f64,
+    /// Hourglass control coefficient `kappa` (dimensionless; Table 1: 0.075).
+    pub hourglass_kappa: f64,
+    pub variant: GradientVariant,
+    /// NiftySim's timing quirks (see `NOTES.md` section 2): `NumSteps + 1` iterations,
+    /// unclamped load shapes, external forces lagging one step.
+    pub niftysim_timing: bool,
+}
+
+impl Default for Numerics {
+    fn default() -> Self {
+        Numerics { damping: 0.0, hourglass_kappa: 0.075, variant: GradientVariant::MeanGradient, niftysim_timing: false }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Problem {
+    /// The input file, for messages.
+    pub source: String,
+    pub mesh: Mesh,
+    pub materials: Vec<MaterialSpec>,
+    /// Material index of each element.
+    pub element_material: Vec<u32>,
+    pub bc: BoundaryConditions,
+    pub time: TimeSettings,
+    pub numerics: Numerics,
+    /// Constraint semantics: `true` = NiftySim's (Disp overrides Fix, duplicate Disp values on
+    /// one DOF add up); `false` = any DOF constrained twice is an error.
+    pub additive_constraints: bool,
+}
+
+impl Problem {
+    /// Number of iterations the run executes.
+    pub fn num_steps(&self) -> usize {
+        let n = (self.time.total_time / self.time.dt).round() as usize;
+        if self.numerics.niftysim_timing {
+            n + 1
+        } else {
+            n
+        }
+    }
+
+    /// Checks everything that is not the mesh's own business: positive moduli, density,
+    /// time step; materials assigned; constraint node indices; conflicts.
+    pub fn validate(&self) -> Result<()> {
+        let f = self.source.as_str();
+        self.mesh.validate(f)?;
+        let pos = |v: f64| v.is_finite() && v > 0.0;
+        for (i, m) in self.materials.iter().enumerate() {
+            let field = |k: &str| format!("materials[{i}] ({}).{k}", m.name);
+            if !pos(m.law.mu) {
+                return Err(Error::field(f, field("mu"), format!("shear modulus must be positive, got {}", m.law.mu)));
+            }
+            if !pos(m.law.bulk) {
+                return Err(Error::field(f, field("K"), format!("bulk modulus must be positive, got {}", m.law.bulk)));
+            }
+            if !pos(m.density) {
+                return Err(Error::field(f, field("density"), format!("density must be positive, got {}", m.density)));
+            }
+        }
+        if self.element_material.len() != self.mesh.elements.len() {
+            return Err(Error::input(f, Location::None, "internal: element_material has the wrong length"));
+        }
+        if let Some(e) = self.element_material.iter().position(|&m| m == u32::MAX) {
+            return Err(Error::input(f, Location::Field(format!("element {e}")), "element has no material (it is in no element set)"));
+        }
+        if !pos(self.time.dt) {
+            return Err(Error::field(f, "dt", format!("time step must be positive, got {}", self.time.dt)));
+        }
+        if !pos(self.time.total_time) {
+            return Err(Error::field(f, "total_time", format!("total time must be positive, got {}", self.time.total_time)));
+        }
+        if self.time.output_every == 0 {
+            return Err(Error::field(f, "output_every", "must be at least 1 step"));
+        }
+        if !(self.numerics.damping.is_finite() && self.numerics.damping >= 0.0) {
+            return Err(Error::field(f, "damping", format!("must be >= 0, got {}", self.numerics.damping)));
+        }
+        if !(self.numerics.hourglass_kappa.is_finite() && self.numerics.hourglass_kappa >= 0.0) {
+            return Err(Error::field(f, "hourglass_kappa", format!("must be >= 0, got {}", self.numerics.hourglass_kappa)));
+        }
+        let nn = self.mesh.nodes.len();
+        let check_nodes = |what: &str, nodes: &[u32]| -> Result<()> {
+            if let Some(&n) = nodes.iter().find(|&&n| n as usize >= nn) {
+                return Err(Error::field(f, what, format!("node {n} out of range (the mesh has {nn} nodes)")));
+            }
+            Ok(())
+        };
+        let bc = &self.bc;
+        for (i, c) in bc.fixed.iter().enumerate() {
+            check_nodes(&format!("fix[{i}].nodes"), &c.nodes)?;
+        }
+        for (i, c) in bc.displacements.iter().enumerate() {
+            check_nodes(&format!("displacement[{i}].nodes"), &c.nodes)?;
+        }
+        for (i, c) in bc.rotations.iter().enumerate() {
+            check_nodes(&format!("rotation[{i}].nodes"), &c.nodes)?;
+            let n = crate::linalg::norm(&c.axis);
+            if !((n - 1.0).abs() < 1e-12) {
+                return Err(Error::field(f, format!("rotation[{i}].axis"), "axis must be a unit vector"));
+            }
+        }
+        for (i, c) in bc.forces.iter().enumerate() {
+            check_nodes(&format!("force[{i}].nodes"), &c.nodes)?;
+        }
+        let curves = bc
+            .displacements
+            .iter()
+            .map(|c| c.curve)
+            .chain(bc.rotations.iter().map(|c| c.curve))
+            .chain(bc.forces.iter().map(|c| c.curve))
+            .chain(bc.gravity.iter().map(|c| c.curve));
+        for c in curves {
+            if !pos(c.duration) {
+                return Err(Error::field(f, "duration", format!("load curve duration must be positive, got {}", c.duration)));
+            }
+        }
+        if !self.additive_constraints {
+            // every DOF may be constrained by at most one condition
+            let mut owner: Vec<Option<String>> = vec![None; 3 * nn];
+            let mut claim = |dof: usize, who: String| -> Result<()> {
+                if let Some(prev) = &owner[dof] {
+                    return Err(Error::field(
+                        f,
+                        who.clone(),
+                        format!("node {} DOF {} is already constrained by {prev}", dof / 3, dof % 3),
+                    ));
+                }
+                owner[dof] = Some(who);
+                Ok(())
+            };
+            for (i, c) in bc.fixed.iter().enumerate() {
+                for &n in &c.nodes {
+                    for d in 0..3 {
+                        if c.dofs[d] {
+                            claim(3 * n as usize + d, format!("fix[{i}]"))?;
+                        }
+                    }
+                }
+            }
+            for (i, c) in bc.displacements.iter().enumerate() {
+                for &n in &c.nodes {
+                    claim(3 * n as usize + c.dof, format!("displacement[{i}]"))?;
+                }
+            }
+            for (i, c) in bc.rotations.iter().enumerate() {
+                for &n in &c.nodes {
+                    for d in 0..3 {
+                        claim(3 * n as usize + d, format!("rotation[{i}]"))?;
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}

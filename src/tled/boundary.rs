@@ -1,0 +1,147 @@
+//! Boundary conditions and loads: fixed DOFs, prescribed displacements with load
+//! shapes, a prescribed rigid rotation of a node set (the jaw), nodal forces, gravity.
+
+use crate::linalg::rotation_matrix;
+
+/// A load shape of relative time `tau` in `[0, 1]`: the fraction of the magnitude applied.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LoadShape {
+    /// `tau`.
+    Ramp,
+    /// `10 tau^3 - 15 tau^4 + 6 tau^5` (zero velocity and acceleration at both ends).
+    Poly345,
+    /// `1` from the start.
+    Step,
+    /// `tau exp(cos(4 pi tau) - 1)` (NiftySim's wavy ramp).
+    Hilly,
+    /// `tau / 0.1` below `tau = 0.1`, then `1`.
+    RampHold,
+    /// `3 tau^2 - 2 tau^3` (zero velocity at both ends).
+    SmoothStep,
+}
+
+impl LoadShape {
+    /// The shape at relative time `tau` (not clamped: NiftySim evaluates past 1).
+    pub fn eval(self, tau: f64) -> f64 {
+        match self {
+            LoadShape::Ramp => tau,
+            LoadShape::Poly345 => tau * tau * tau * (10.0 - 15.0 * tau + 6.0 * tau * tau),
+            LoadShape::Step => 1.0,
+            LoadShape::Hilly => tau * ((4.0 * std::f64::consts::PI * tau).cos() - 1.0).exp(),
+            LoadShape::RampHold => {
+                if tau < 0.1 {
+                    tau / 0.1
+                } else {
+                    1.0
+                }
+            }
+            LoadShape::SmoothStep => tau * tau * (3.0 - 2.0 * tau),
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<LoadShape> {
+        Some(match s.to_ascii_uppercase().as_str() {
+            "RAMP" => LoadShape::Ramp,
+            "POLY345" => LoadShape::Poly345,
+            "STEP" => LoadShape::Step,
+            "HILLY" => LoadShape::Hilly,
+            "RAMPHOLD" => LoadShape::RampHold,
+            "SMOOTH_STEP" | "SMOOTHSTEP" => LoadShape::SmoothStep,
+            _ => return None,
+        })
+    }
+}
+
+/// A load shape applied over a time window: `tau = (t - start) / duration`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LoadCurve {
+    pub shape: LoadShape,
+    /// When the shape starts (s).
+    pub start: f64,
+    /// How long it takes to reach its end value (s).
+    pub duration: f64,
+}
+
+impl LoadCurve {
+    /// Value at time `t` (s). With `clamp`, `tau` is held in `[0, 1]` (the shape holds its
+    /// end value, and is zero before `start`); without, it is NiftySim's unclamped value.
+    pub fn value(&self, t: f64, clamp: bool) -> f64 {
+        let mut tau = (t - self.start) / self.duration;
+        if clamp {
+            if tau <= 0.0 {
+                return 0.0;
+            }
+            tau = tau.min(1.0);
+        }
+        self.shape.eval(tau)
+    }
+}
+
+/// Which of the three DOFs of a node a constraint acts on.
+pub type DofMask = [bool; 3];
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Fixed {
+    pub nodes: Vec<u32>,
+    pub dofs: DofMask,
+}
+
+/// `u_dof(t) = value * curve(t)` at each node.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrescribedDisplacement {
+    pub nodes: Vec<u32>,
+    pub dof: usize,
+    /// One value per node (m).
+    pub values: Vec<f64>,
+    pub curve: LoadCurve,
+}
+
+/// A rigid rotation of a node set about the axis through `point` along `axis` (unit),
+/// by the angle `angle * curve(t)` (rad): `u = R (X - p) + p - X`. It drives the jaw.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrescribedRotation {
+    pub nodes: Vec<u32>,
+    pub point: [f64; 3],
+    pub axis: [f64; 3],
+    pub angle: f64,
+    pub curve: LoadCurve,
+}
+
+impl PrescribedRotation {
+    /// Displacement of reference point `x` at time `t`.
+    pub fn displacement(&self, x: &[f64; 3], t: f64, clamp: bool) -> [f64; 3] {
+        let r = rotation_matrix(&self.axis, self.angle * self.curve.value(t, clamp));
+        let d = [x[0] - self.point[0], x[1] - self.point[1], x[2] - self.point[2]];
+        let rd = crate::linalg::mat_vec(&r, &d);
+        [rd[0] - d[0], rd[1] - d[1], rd[2] - d[2]]
+    }
+}
+
+/// `f_dof(t) = value * curve(t)` at each node (N).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NodalForce {
+    pub nodes: Vec<u32>,
+    pub dof: usize,
+    pub values: Vec<f64>,
+    pub curve: LoadCurve,
+}
+
+/// Body force `m_n g(t)` on the nodes (all nodes when `nodes` is `None`),
+/// `g(t) = acceleration * curve(t)` (m/s^2), `m_n` the lumped mass.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gravity {
+    pub nodes: Option<Vec<u32>>,
+    pub acceleration: [f64; 3],
+    pub curve: LoadCurve,
+}
+
+/// Everything imposed on the model.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BoundaryConditions {
+    pub fixed: Vec<Fixed>,
+    pub displacements: Vec<PrescribedDisplacement>,
+    pub rotations: Vec<PrescribedRotation>,
+    pub forces: Vec<NodalForce>,
+    pub gravity: Vec<Gravity>,
+}

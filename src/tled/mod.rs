@@ -1,0 +1,10 @@
+//! Total Lagrangian explicit dynamics (paper section 3.2): precompute, the two stages
+//! of a step (`element_forces`, `node_update`), boundary conditions, stability.
+pub mod boundary;
+pub mod element_forces;
+pub mod node_update;
+pub mod precompute;
+pub mod solver;
+pub mod stability;
+
+pub use solver::Simulation;

@@ -1,0 +1,100 @@
+//! Stage 2 of a TLED step: gather the element forces at each node in a fixed order and
+//! advance the displacement by central differences (paper eq. 3 with lumped mass `M`
+//! and mass-proportional damping `C = alpha M`).
+//!
+//! The textbook recursion is `u_{n+1} = A (R_n - F_n) + B u_n + C u_{n-1}` with
+//! `A = dt^2 / (m (1 + alpha dt/2))`, `B = 2 / (1 + alpha dt/2)`,
+//! `C = -(1 - alpha dt/2) / (1 + alpha dt/2)`. Because `B + C = 1` exactly in real
+//! arithmetic, it is evaluated here in increment form,
+//!
+//! $$ u_{n+1} = u_n + A (R_n - F_n) + c_1 (u_n - u_{n-1}), \quad c_1 = \frac{1 - \alpha\,dt/2}{1 + \alpha\,dt/2}, $$
+//!
+//! which keeps a body at rest exactly at rest in `f32` (the rounded `B + C - 1` of the
+//! textbook form acts as a spurious spring: `NOTES.md` section 1).
+//!
+//! Verified by `verification/time_integration.rs` (second-order convergence, energy
+//! conservation without damping, stability limit).
+
+use crate::mesh::NodeGather;
+use crate::real::Real;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Nodes per parallel work item.
+pub const NODE_CHUNK: usize = 512;
+
+/// Central-difference coefficients, derived once from `dt`, `alpha` and the masses.
+#[derive(Clone, Debug)]
+pub struct CentralDifference<T> {
+    /// `A_n = dt^2 / (m_n (1 + alpha dt / 2))` per node (s^2/kg).
+    pub a: Vec<T>,
+    /// `c_1 = (1 - alpha dt/2) / (1 + alpha dt/2)`.
+    pub c1: T,
+}
+
+impl<T: Real> CentralDifference<T> {
+    pub fn new(dt: f64, damping: f64, mass: &[f64]) -> Self {
+        let h = 0.5 * damping * dt;
+        CentralDifference {
+            a: mass.iter().map(|&m| T::from_f64(dt * dt / (m * (1.0 + h)))).collect(),
+            c1: T::from_f64((1.0 - h) / (1.0 + h)),
+        }
+    }
+}
+
+/// Sum of the element force blocks at node `n`, in the gather list's fixed order.
+#[inline(always)]
+pub fn gather_node<T: Real>(gather: &NodeGather, elem_f: &[[[T; 3]; 8]], n: usize) -> [T; 3] {
+    let mut f = [T::ZERO; 3];
+    for &s in gather.of(n) {
+        let blk = &elem_f[s as usize / 8][s as usize % 8];
+        f[0] += blk[0];
+        f[1] += blk[1];
+        f[2] += blk[2];
+    }
+    f
+}
+
+/// Stage `node_update`: `u_next` from `u`, `u_prev`, the element forces and the external
+/// forces `r_ext` (`None` = no external load). Returns the smallest node index with a
+/// non-finite result, if any.
+pub fn node_update<T: Real>(
+    gather: &NodeGather,
+    cd: &CentralDifference<T>,
+    elem_f: &[[[T; 3]; 8]],
+    r_ext: Option<&[[T; 3]]>,
+    u: &[[T; 3]],
+    u_prev: &[[T; 3]],
+    u_next: &mut [[T; 3]],
+) -> Option<usize> {
+    let bad = AtomicUsize::new(usize::MAX);
+    let c1 = cd.c1;
+    u_next.par_chunks_mut(NODE_CHUNK).enumerate().for_each(|(c, chunk)| {
+        let base = c * NODE_CHUNK;
+        for (i, un) in chunk.iter_mut().enumerate() {
+            let n = base + i;
+            let f = gather_node(gather, elem_f, n);
+            let r = match r_ext {
+                Some(r) => r[n],
+                None => [T::ZERO; 3],
+            };
+            let a = cd.a[n];
+            let mut finite = true;
+            for k in 0..3 {
+                let v = u[n][k] + a * (r[k] - f[k]) + c1 * (u[n][k] - u_prev[n][k]);
+                finite &= v.is_finite();
+                un[k] = v;
+            }
+            if !finite {
+                bad.fetch_min(n, Ordering::Relaxed);
+            }
+        }
+    });
+    let b = bad.into_inner();
+    (b != usize::MAX).then_some(b)
+}
+
+/// Internal nodal forces `F_int` (reactions at constrained nodes included) from element blocks.
+pub fn gather_all<T: Real>(gather: &NodeGather, elem_f: &[[[T; 3]; 8]], num_nodes: usize) -> Vec<[T; 3]> {
+    (0..num_nodes).into_par_iter().map(|n| gather_node(gather, elem_f, n)).collect()
+}

@@ -1,0 +1,165 @@
+//! Everything that does not depend on the displacement, computed once in `f64`:
+//! element gradients and weights, hourglass vectors and stiffnesses, lumped masses,
+//! the node gather lists, and the constraint and load plans.
+
+use crate::element::hex8;
+use crate::mesh::NodeGather;
+use crate::problem::Problem;
+use crate::tled::boundary::{LoadCurve, PrescribedRotation};
+
+/// Per-DOF constraint plan. A DOF index is `3 * node + component`.
+#[derive(Clone, Debug, Default)]
+pub struct ConstraintPlan {
+    /// DOFs held at zero.
+    pub fixed: Vec<u32>,
+    /// Prescribed-displacement DOFs (unique, sorted): zeroed, then every group adds its part.
+    pub prescribed_dofs: Vec<u32>,
+    /// `(curve, [(dof, magnitude)])`: the DOF gets `magnitude * curve(t)` added.
+    pub prescribed: Vec<(LoadCurve, Vec<(u32, f64)>)>,
+    pub rotations: Vec<PrescribedRotation>,
+    /// `true` for every DOF whose value is imposed.
+    pub constrained: Vec<bool>,
+}
+
+/// External load plan: `R(t) = sum_g curve_g(t) r_g`, each `r_g` sparse.
+#[derive(Clone, Debug)]
+pub struct LoadGroup {
+    pub curve: LoadCurve,
+    pub entries: Vec<(u32, f64)>,
+}
+
+/// The discretised model in `f64`: the single source of every derived constant that the
+/// CPU stepping (in either precision), the static solver and the stability analysis use.
+#[derive(Clone, Debug)]
+pub struct Discretisation {
+    pub num_nodes: usize,
+    pub conn: Vec<[u32; 8]>,
+    /// Shape-function gradients `D_a` (1/m) of the chosen variant.
+    pub dhdx: Vec<[[f64; 3]; 8]>,
+    /// Force weight `W` (m^3): `V` for `mean_gradient`, `8 det J(0)` for `centroid`.
+    pub weight: Vec<f64>,
+    /// Exact element volume `V` (m^3).
+    pub volume: Vec<f64>,
+    /// Hourglass shape vectors `gamma` (8x4, dimensionless).
+    pub gamma: Vec<[[f64; 4]; 8]>,
+    /// Hourglass stiffness `k` (N/m).
+    pub hg_k: Vec<f64>,
+    pub mu: Vec<f64>,
+    pub bulk: Vec<f64>,
+    pub density: Vec<f64>,
+    /// Lumped nodal mass `m_n = sum_e rho_e V_e / 8` (kg).
+    pub mass: Vec<f64>,
+    pub gather: NodeGather,
+    pub constraints: ConstraintPlan,
+    pub loads: Vec<LoadGroup>,
+}
+
+impl Discretisation {
+    /// Builds the discretisation; the problem must have been validated.
+    pub fn new(p: &Problem) -> Self {
+        let mesh = &p.mesh;
+        let ne = mesh.elements.len();
+        let nn = mesh.nodes.len();
+        let mut d = Discretisation {
+            num_nodes: nn,
+            conn: mesh.elements.clone(),
+            dhdx: Vec::with_capacity(ne),
+            weight: Vec::with_capacity(ne),
+            volume: Vec::with_capacity(ne),
+            gamma: Vec::with_capacity(ne),
+            hg_k: Vec::with_capacity(ne),
+            mu: Vec::with_capacity(ne),
+            bulk: Vec::with_capacity(ne),
+            density: Vec::with_capacity(ne),
+            mass: vec![0.0; nn],
+            gather: NodeGather::new(nn, &mesh.elements),
+            constraints: ConstraintPlan::default(),
+            loads: Vec::new(),
+        };
+        for e in 0..ne {
+            let x = mesh.element_coords(e);
+            let (g, w) = hex8::gradients(&x, p.numerics.variant);
+            let v = hex8::volume(&x);
+            let m = &p.materials[p.element_material[e] as usize];
+            d.dhdx.push(g);
+            d.weight.push(w);
+            d.volume.push(v);
+            d.gamma.push(hex8::hourglass_vectors(&x, &g));
+            d.hg_k.push(hex8::hourglass_stiffness(p.numerics.hourglass_kappa, v, m.law.mu, m.law.bulk, &g));
+            d.mu.push(m.law.mu);
+            d.bulk.push(m.law.bulk);
+            d.density.push(m.density);
+        }
+        // lumped mass, gathered per node in the fixed slot order
+        for n in 0..nn {
+            d.mass[n] = d.gather.of(n).iter().map(|&s| d.density[s as usize / 8] * d.volume[s as usize / 8] / 8.0).sum();
+        }
+        d.constraints = plan_constraints(p);
+        d.loads = plan_loads(p, &d.mass);
+        d
+    }
+
+    pub fn num_elements(&self) -> usize {
+        self.conn.len()
+    }
+}
+
+fn plan_constraints(p: &Problem) -> ConstraintPlan {
+    let nn = p.mesh.nodes.len();
+    let mut c = ConstraintPlan { constrained: vec![false; 3 * nn], ..Default::default() };
+    for f in &p.bc.fixed {
+        for &n in &f.nodes {
+            for k in 0..3 {
+                if f.dofs[k] {
+                    c.fixed.push(3 * n + k as u32);
+                }
+            }
+        }
+    }
+    c.fixed.sort_unstable();
+    c.fixed.dedup();
+    for pd in &p.bc.displacements {
+        let entries: Vec<(u32, f64)> =
+            pd.nodes.iter().zip(&pd.values).map(|(&n, &v)| (3 * n + pd.dof as u32, v)).collect();
+        c.prescribed_dofs.extend(entries.iter().map(|e| e.0));
+        c.prescribed.push((pd.curve, entries));
+    }
+    c.prescribed_dofs.sort_unstable();
+    c.prescribed_dofs.dedup();
+    c.rotations = p.bc.rotations.clone();
+    for &k in c.fixed.iter().chain(&c.prescribed_dofs) {
+        c.constrained[k as usize] = true;
+    }
+    for r in &c.rotations {
+        for &n in &r.nodes {
+            for k in 0..3 {
+                c.constrained[3 * n as usize + k] = true;
+            }
+        }
+    }
+    c
+}
+
+fn plan_loads(p: &Problem, mass: &[f64]) -> Vec<LoadGroup> {
+    let mut groups = Vec::new();
+    for f in &p.bc.forces {
+        let entries = f.nodes.iter().zip(&f.values).map(|(&n, &v)| (3 * n + f.dof as u32, v)).collect();
+        groups.push(LoadGroup { curve: f.curve, entries });
+    }
+    for g in &p.bc.gravity {
+        let nodes: Vec<u32> = match &g.nodes {
+            Some(n) => n.clone(),
+            None => (0..mass.len() as u32).collect(),
+        };
+        let mut entries = Vec::with_capacity(3 * nodes.len());
+        for n in nodes {
+            for k in 0..3 {
+                if g.acceleration[k] != 0.0 {
+                    entries.push((3 * n + k as u32, mass[n as usize] * g.acceleration[k]));
+                }
+            }
+        }
+        groups.push(LoadGroup { curve: g.curve, entries });
+    }
+    groups
+}

@@ -1,0 +1,261 @@
+//! The explicit TLED run: one [`Simulation`] per run, advanced one step at a time.
+//!
+//! One step (iteration `s`, from `t_s = s dt` to `t_{s+1}`):
+//! 1. `element_forces`: `F_int` blocks from `u_s`, stop if an element inverted;
+//! 2. external forces `R_s` at `t_s`;
+//! 3. `node_update`: central differences for every DOF;
+//! 4. `apply_constraints`: fixed, prescribed and rotated DOFs set at `t_{s+1}`;
+//! 5. buffers rotate.
+
+use crate::error::{Error, Result};
+use crate::problem::Problem;
+use crate::real::Real;
+use crate::tled::element_forces::{element_forces, ElementArrays};
+use crate::tled::node_update::{gather_all, node_update, CentralDifference};
+use crate::tled::precompute::Discretisation;
+
+/// Energies of a state (J).
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct Energies {
+    pub kinetic: f64,
+    pub strain: f64,
+}
+
+pub struct Simulation<T: Real> {
+    pub disc: Discretisation,
+    reference: Vec<[f64; 3]>,
+    el: ElementArrays<T>,
+    cd: CentralDifference<T>,
+    u: Vec<[T; 3]>,
+    u_prev: Vec<[T; 3]>,
+    u_next: Vec<[T; 3]>,
+    elem_f: Vec<[[T; 3]; 8]>,
+    r_ext: Vec<[T; 3]>,
+    step: usize,
+    num_steps: usize,
+    dt: f64,
+    total_time: f64,
+    niftysim_timing: bool,
+}
+
+impl<T: Real> Simulation<T> {
+    /// Validates the problem and precomputes everything. Starts from rest, `u = 0`.
+    pub fn new(problem: &Problem) -> Result<Self> {
+        problem.validate()?;
+        let disc = Discretisation::new(problem);
+        let nn = disc.num_nodes;
+        let ne = disc.num_elements();
+        let el = ElementArrays::from_discretisation(&disc);
+        let cd = CentralDifference::new(problem.time.dt, problem.numerics.damping, &disc.mass);
+        Ok(Simulation {
+            reference: problem.mesh.nodes.clone(),
+            el,
+            cd,
+            u: vec![[T::ZERO; 3]; nn],
+            u_prev: vec![[T::ZERO; 3]; nn],
+            u_next: vec![[T::ZERO; 3]; nn],
+            elem_f: vec![[[T::ZERO; 3]; 8]; ne],
+            r_ext: vec![[T::ZERO; 3]; nn],
+            step: 0,
+            num_steps: problem.num_steps(),
+            dt: problem.time.dt,
+            total_time: problem.time.total_time,
+            niftysim_timing: problem.numerics.niftysim_timing,
+            disc,
+        })
+    }
+
+    /// Iterations executed so far.
+    pub fn step_index(&self) -> usize {
+        self.step
+    }
+    /// Iterations the run executes in all.
+    pub fn num_steps(&self) -> usize {
+        self.num_steps
+    }
+    /// Time of the current displacement (s).
+    pub fn time(&self) -> f64 {
+        self.step as f64 * self.dt
+    }
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+    pub fn is_finished(&self) -> bool {
+        self.step >= self.num_steps
+    }
+    pub fn num_elements(&self) -> usize {
+        self.el.len()
+    }
+    pub fn displacement(&self) -> &[[T; 3]] {
+        &self.u
+    }
+    pub fn previous_displacement(&self) -> &[[T; 3]] {
+        &self.u_prev
+    }
+    pub fn displacement_f64(&self) -> Vec<[f64; 3]> {
+        self.u.iter().map(|v| v.map(T::to_f64)).collect()
+    }
+
+    /// Sets the current displacement and the previous one (an initial condition:
+    /// `u_prev = u - dt v0` gives initial velocity `v0`).
+    pub fn set_state(&mut self, u: &[[f64; 3]], u_prev: &[[f64; 3]]) {
+        for (d, s) in self.u.iter_mut().zip(u) {
+            *d = s.map(T::from_f64);
+        }
+        for (d, s) in self.u_prev.iter_mut().zip(u_prev) {
+            *d = s.map(T::from_f64);
+        }
+    }
+
+    /// Advances one iteration. On divergence the state is left as it was before the step.
+    pub fn step(&mut self) -> Result<()> {
+        let s = self.step;
+        let t = s as f64 * self.dt;
+        if let Some(e) = element_forces(&self.el, &self.u, &mut self.elem_f) {
+            return Err(Error::Diverged {
+                step: s,
+                time: t,
+                element: Some(e),
+                node: None,
+                reason: "element inverted or degenerate (det F <= 0 or not finite)".into(),
+            });
+        }
+        let has_loads = !self.disc.loads.is_empty();
+        if has_loads {
+            self.assemble_external(s);
+        }
+        let r = has_loads.then_some(self.r_ext.as_slice());
+        if let Some(n) = node_update(&self.disc.gather, &self.cd, &self.elem_f, r, &self.u, &self.u_prev, &mut self.u_next) {
+            return Err(Error::Diverged {
+                step: s,
+                time: t,
+                element: None,
+                node: Some(n),
+                reason: "non-finite displacement".into(),
+            });
+        }
+        let (t_next, clamp) = self.constraint_time(s + 1);
+        apply_constraints(&self.disc, &self.reference, &mut self.u_next, t_next, clamp);
+        std::mem::swap(&mut self.u_prev, &mut self.u);
+        std::mem::swap(&mut self.u, &mut self.u_next);
+        self.step += 1;
+        Ok(())
+    }
+
+    /// The time at which load curves are evaluated for index `s`, and whether to clamp.
+    /// NiftySim's timing is relative time `s dt / T` unclamped, i.e. the same absolute
+    /// time when curves span the whole run.
+    fn constraint_time(&self, s: usize) -> (f64, bool) {
+        (s as f64 * self.dt, !self.niftysim_timing)
+    }
+
+    fn assemble_external(&mut self, s: usize) {
+        for r in self.r_ext.iter_mut() {
+            *r = [T::ZERO; 3];
+        }
+        // NiftySim's forces lag: iteration s uses the value at s dt, and zero at s = 0.
+        if self.niftysim_timing && s == 0 {
+            return;
+        }
+        let (t, clamp) = self.constraint_time(s);
+        for g in &self.disc.loads {
+            let c = g.curve.value(t, clamp);
+            for &(dof, v) in &g.entries {
+                self.r_ext[dof as usize / 3][dof as usize % 3] += T::from_f64(v * c);
+            }
+        }
+    }
+
+    /// Internal nodal forces at the current state (N), reactions at constrained DOFs included.
+    pub fn internal_forces(&mut self) -> Vec<[f64; 3]> {
+        element_forces(&self.el, &self.u, &mut self.elem_f);
+        gather_all(&self.disc.gather, &self.elem_f, self.disc.num_nodes).into_iter().map(|f| f.map(T::to_f64)).collect()
+    }
+
+    /// Kinetic energy from the backward difference `(u_n - u_{n-1}) / dt`, strain energy
+    /// including the hourglass part, both in `f64`.
+    pub fn energies(&self) -> Energies {
+        let u = self.displacement_f64();
+        let mut kinetic = 0.0;
+        for n in 0..self.disc.num_nodes {
+            let mut v2 = 0.0;
+            for k in 0..3 {
+                let v = (self.u[n][k].to_f64() - self.u_prev[n][k].to_f64()) / self.dt;
+                v2 += v * v;
+            }
+            kinetic += 0.5 * self.disc.mass[n] * v2;
+        }
+        Energies { kinetic, strain: strain_energy(&self.disc, &u) }
+    }
+
+    pub fn total_time(&self) -> f64 {
+        self.total_time
+    }
+}
+
+/// Sets every constrained DOF of `u` at time `t`: fixed DOFs to zero, prescribed DOFs to
+/// the sum of their prescribed values, rotated nodes to the rigid rotation.
+pub fn apply_constraints<T: Real>(d: &Discretisation, reference: &[[f64; 3]], u: &mut [[T; 3]], t: f64, clamp: bool) {
+    let c = &d.constraints;
+    for &k in &c.fixed {
+        u[k as usize / 3][k as usize % 3] = T::ZERO;
+    }
+    if !c.prescribed.is_empty() {
+        // accumulate in f64, then round once
+        let mut acc: std::collections::BTreeMap<u32, f64> = c.prescribed_dofs.iter().map(|&k| (k, 0.0)).collect();
+        for (curve, entries) in &c.prescribed {
+            let s = curve.value(t, clamp);
+            for &(k, v) in entries {
+                *acc.get_mut(&k).expect("prescribed dof planned") += v * s;
+            }
+        }
+        for (k, v) in acc {
+            u[k as usize / 3][k as usize % 3] = T::from_f64(v);
+        }
+    }
+    for r in &c.rotations {
+        for &n in &r.nodes {
+            let du = r.displacement(&reference[n as usize], t, clamp);
+            u[n as usize] = du.map(T::from_f64);
+        }
+    }
+}
+
+/// Displacement gradient `H = sum_a u_a (x) D_a` of element `e` in `f64`.
+pub fn displacement_gradient(d: &Discretisation, u: &[[f64; 3]], e: usize) -> [[f64; 3]; 3] {
+    let mut h = [[0.0; 3]; 3];
+    for a in 0..8 {
+        let ua = u[d.conn[e][a] as usize];
+        for i in 0..3 {
+            for j in 0..3 {
+                h[i][j] += ua[i] * d.dhdx[e][a][j];
+            }
+        }
+    }
+    h
+}
+
+/// Stored energy of the discretisation (J): `sum_e W_e Psi(H_e) + k_e/2 sum_alpha |h_alpha|^2`.
+/// Its gradient with respect to `u` is exactly the internal force of eq. (4).
+pub fn strain_energy(d: &Discretisation, u: &[[f64; 3]]) -> f64 {
+    let per: Vec<f64> = (0..d.num_elements()).map(|e| element_energy(d, u, e)).collect();
+    per.iter().sum()
+}
+
+/// Energy of one element (J), elastic and hourglass parts.
+pub fn element_energy(d: &Discretisation, u: &[[f64; 3]], e: usize) -> f64 {
+    let h = displacement_gradient(d, u, e);
+    let psi = crate::material::neo_hookean::strain_energy_density(&h, d.mu[e], d.bulk[e]);
+    let mut hg = 0.0;
+    for alpha in 0..4 {
+        let mut v = [0.0; 3];
+        for b in 0..8 {
+            let ub = u[d.conn[e][b] as usize];
+            for i in 0..3 {
+                v[i] += d.gamma[e][b][alpha] * ub[i];
+            }
+        }
+        hg += v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    }
+    d.weight[e] * psi + 0.5 * d.hg_k[e] * hg
+}

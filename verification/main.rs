@@ -1,0 +1,5 @@
+//! The verification suite: one `cargo test` target, one module per claim family.
+//! The catalogue (claim, paper equation, tolerance and why) is `verification/README.md`.
+
+mod common;
+mod niftysim;

@@ -1,0 +1,91 @@
+//! NiftySim as an external oracle: with NiftySim's element variant and timing, our f64 run
+//! reproduces its double-precision build (`../shared/oracle/niftysim/out_f64`).
+
+use crate::common::*;
+use sticky_lips::element::hex8::GradientVariant;
+use sticky_lips::io::niftysim;
+use sticky_lips::material::neo_hookean::{pk2_stress, two_green_strain};
+use sticky_lips::tled::solver::displacement_gradient;
+use sticky_lips::tled::Simulation;
+use sticky_lips::Real;
+
+const MODELS: [&str; 5] = ["hex1_stretch", "hex1_stretch_minbc", "hex1_distorted", "block4_compress", "cantilever_tipdisp"];
+
+fn run_model<T: Real>(name: &str) -> (Simulation<T>, Vec<[f64; 3]>) {
+    let p = niftysim::read(&oracle_dir().join(format!("{name}.xml")), GradientVariant::Centroid, true).unwrap();
+    let mut sim = Simulation::<T>::new(&p).unwrap();
+    while !sim.is_finished() {
+        sim.step().unwrap();
+    }
+    let f = sim.internal_forces();
+    (sim, f)
+}
+
+fn vec3_table(rows: &[Vec<f64>]) -> Vec<[f64; 3]> {
+    rows.iter().map(|r| [r[1], r[2], r[3]]).collect()
+}
+
+#[test]
+fn niftysim_f64_displacements_and_forces() {
+    for name in MODELS {
+        let out = oracle_dir().join("out_f64");
+        let (sim, fint) = run_model::<f64>(name);
+        let info = std::fs::read_to_string(out.join(format!("{name}_info.txt"))).unwrap();
+        let executed: usize = info.lines().find_map(|l| l.strip_prefix("steps_executed ")).map(|v| v.trim().parse().unwrap()).unwrap();
+        assert_eq!(sim.step_index(), executed, "{name}: iterations");
+        let u_ref = vec3_table(&read_table(&out.join(format!("{name}_U.txt"))));
+        let f_ref = vec3_table(&read_table(&out.join(format!("{name}_Fint.txt"))));
+        let du = rel_max_diff(&sim.displacement_f64(), &u_ref);
+        let df = rel_max_diff(&fint, &f_ref);
+        println!("{name}: U rel {du:.2e}, Fint rel {df:.2e}");
+        assert!(du <= 1e-10, "{name}: displacement differs from NiftySim f64 by {du:e} (relative)");
+        assert!(df <= 1e-10, "{name}: internal force differs from NiftySim f64 by {df:e} (relative)");
+    }
+}
+
+#[test]
+fn niftysim_f64_masses_volumes_gradients_stress() {
+    for name in MODELS {
+        let out = oracle_dir().join("out_f64");
+        let (sim, _) = run_model::<f64>(name);
+        let d = &sim.disc;
+        let mass = read_table(&out.join(format!("{name}_mass.txt")));
+        let mut worst: f64 = 0.0;
+        for r in &mass {
+            worst = worst.max((d.mass[r[0] as usize] - r[1]).abs() / r[1]);
+        }
+        assert!(worst < 1e-13, "{name}: mass rel {worst:e}");
+        let elem = read_table(&out.join(format!("{name}_elem.txt")));
+        let (mut wv, mut wg): (f64, f64) = (0.0, 0.0);
+        for r in &elem {
+            let e = r[0] as usize;
+            wv = wv.max((d.volume[e] - r[1]).abs() / r[1]);
+            let gmax = r[2..].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for a in 0..8 {
+                for k in 0..3 {
+                    wg = wg.max((d.dhdx[e][a][k] - r[2 + 3 * a + k]).abs() / gmax);
+                }
+            }
+        }
+        assert!(wv < 1e-13, "{name}: volume rel {wv:e}");
+        assert!(wg < 1e-13, "{name}: gradient rel {wg:e}");
+        let u = sim.displacement_f64();
+        let se = read_table(&out.join(format!("{name}_SE.txt")));
+        let (mut ws, mut we): (f64, f64) = (0.0, 0.0);
+        let idx = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2)];
+        for r in &se {
+            let e = r[0] as usize;
+            let h = displacement_gradient(d, &u, e);
+            let (s, _) = pk2_stress(&h, d.mu[e], d.bulk[e]);
+            let e2 = two_green_strain(&h);
+            let smax = r[1..7].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let emax = r[7..13].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (k, (i, j)) in idx.iter().enumerate() {
+                ws = ws.max((s[*i][*j] - r[1 + k]).abs() / smax);
+                we = we.max((0.5 * e2[*i][*j] - r[7 + k]).abs() / emax);
+            }
+        }
+        println!("{name}: mass {worst:.1e} V {wv:.1e} grad {wg:.1e} S {ws:.1e} E {we:.1e}");
+        assert!(ws < 1e-10 && we < 1e-10, "{name}: stress rel {ws:e}, strain rel {we:e}");
+    }
+}
