@@ -16,13 +16,31 @@ pub enum Location {
 #[derive(Debug)]
 pub enum Error {
     /// Malformed or inconsistent input.
-    Input { file: String, location: Location, message: String },
+    Input {
+        file: String,
+        location: Location,
+        message: String,
+    },
     /// Reading or writing a file failed.
-    Io { path: PathBuf, source: std::io::Error },
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     /// The requested time step exceeds the critical one.
-    UnstableTimeStep { dt: f64, critical: f64, element: usize, element_estimate: f64 },
+    UnstableTimeStep {
+        dt: f64,
+        critical: f64,
+        element: usize,
+        element_estimate: f64,
+    },
     /// The explicit run diverged.
-    Diverged { step: usize, time: f64, element: Option<usize>, node: Option<usize>, reason: String },
+    Diverged {
+        step: usize,
+        time: f64,
+        element: Option<usize>,
+        node: Option<usize>,
+        reason: String,
+    },
     /// The static solver did not converge.
     NotConverged(String),
 }
@@ -31,13 +49,28 @@ pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
     pub fn input(file: impl Into<String>, location: Location, message: impl Into<String>) -> Self {
-        Error::Input { file: file.into(), location, message: message.into() }
+        Error::Input {
+            file: file.into(),
+            location,
+            message: message.into(),
+        }
     }
-    pub fn field(file: impl Into<String>, field: impl Into<String>, message: impl Into<String>) -> Self {
-        Error::Input { file: file.into(), location: Location::Field(field.into()), message: message.into() }
+    pub fn field(
+        file: impl Into<String>,
+        field: impl Into<String>,
+        message: impl Into<String>,
+    ) -> Self {
+        Error::Input {
+            file: file.into(),
+            location: Location::Field(field.into()),
+            message: message.into(),
+        }
     }
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
-        Error::Io { path: path.into(), source }
+        Error::Io {
+            path: path.into(),
+            source,
+        }
     }
 }
 

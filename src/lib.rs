@@ -6,6 +6,7 @@
 //! and figures. See `ARCHITECTURE.md` for the data flow of one time step and
 //! `paper/equations.md` for where each equation of the paper lives.
 
+pub mod driver;
 pub mod element;
 pub mod error;
 pub mod io;

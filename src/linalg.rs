@@ -17,7 +17,8 @@ pub fn identity<T: Real>() -> Mat3<T> {
 
 #[inline(always)]
 pub fn det<T: Real>(m: &Mat3<T>) -> T {
-    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
         + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
 }
 
@@ -82,7 +83,11 @@ pub fn tmul<T: Real>(a: &Mat3<T>, b: &Mat3<T>) -> Mat3<T> {
 
 #[inline(always)]
 pub fn transpose<T: Real>(a: &Mat3<T>) -> Mat3<T> {
-    [[a[0][0], a[1][0], a[2][0]], [a[0][1], a[1][1], a[2][1]], [a[0][2], a[1][2], a[2][2]]]
+    [
+        [a[0][0], a[1][0], a[2][0]],
+        [a[0][1], a[1][1], a[2][1]],
+        [a[0][2], a[1][2], a[2][2]],
+    ]
 }
 
 #[inline(always)]
@@ -106,7 +111,11 @@ pub fn dot<T: Real>(a: &Vec3<T>, b: &Vec3<T>) -> T {
 
 #[inline(always)]
 pub fn cross(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 
 #[inline(always)]
@@ -120,7 +129,8 @@ pub fn norm(a: &[f64; 3]) -> f64 {
 pub fn det_identity_plus_minus_one<T: Real>(h: &Mat3<T>) -> T {
     // det(I+H) = 1 + tr H + (principal 2x2 minors of H) + det H
     let tr = trace(h);
-    let minors = h[0][0] * h[1][1] - h[0][1] * h[1][0] + h[1][1] * h[2][2] - h[1][2] * h[2][1] + h[0][0] * h[2][2]
+    let minors = h[0][0] * h[1][1] - h[0][1] * h[1][0] + h[1][1] * h[2][2] - h[1][2] * h[2][1]
+        + h[0][0] * h[2][2]
         - h[0][2] * h[2][0];
     tr + minors + det(h)
 }

@@ -43,7 +43,12 @@ pub struct Numerics {
 
 impl Default for Numerics {
     fn default() -> Self {
-        Numerics { damping: 0.0, hourglass_kappa: 0.075, variant: GradientVariant::MeanGradient, niftysim_timing: false }
+        Numerics {
+            damping: 0.0,
+            hourglass_kappa: 0.075,
+            variant: GradientVariant::MeanGradient,
+            niftysim_timing: false,
+        }
     }
 }
 
@@ -83,40 +88,80 @@ impl Problem {
         for (i, m) in self.materials.iter().enumerate() {
             let field = |k: &str| format!("materials[{i}] ({}).{k}", m.name);
             if !pos(m.law.mu) {
-                return Err(Error::field(f, field("mu"), format!("shear modulus must be positive, got {}", m.law.mu)));
+                return Err(Error::field(
+                    f,
+                    field("mu"),
+                    format!("shear modulus must be positive, got {}", m.law.mu),
+                ));
             }
             if !pos(m.law.bulk) {
-                return Err(Error::field(f, field("K"), format!("bulk modulus must be positive, got {}", m.law.bulk)));
+                return Err(Error::field(
+                    f,
+                    field("K"),
+                    format!("bulk modulus must be positive, got {}", m.law.bulk),
+                ));
             }
             if !pos(m.density) {
-                return Err(Error::field(f, field("density"), format!("density must be positive, got {}", m.density)));
+                return Err(Error::field(
+                    f,
+                    field("density"),
+                    format!("density must be positive, got {}", m.density),
+                ));
             }
         }
         if self.element_material.len() != self.mesh.elements.len() {
-            return Err(Error::input(f, Location::None, "internal: element_material has the wrong length"));
+            return Err(Error::input(
+                f,
+                Location::None,
+                "internal: element_material has the wrong length",
+            ));
         }
         if let Some(e) = self.element_material.iter().position(|&m| m == u32::MAX) {
-            return Err(Error::input(f, Location::Field(format!("element {e}")), "element has no material (it is in no element set)"));
+            return Err(Error::input(
+                f,
+                Location::Field(format!("element {e}")),
+                "element has no material (it is in no element set)",
+            ));
         }
         if !pos(self.time.dt) {
-            return Err(Error::field(f, "dt", format!("time step must be positive, got {}", self.time.dt)));
+            return Err(Error::field(
+                f,
+                "dt",
+                format!("time step must be positive, got {}", self.time.dt),
+            ));
         }
         if !pos(self.time.total_time) {
-            return Err(Error::field(f, "total_time", format!("total time must be positive, got {}", self.time.total_time)));
+            return Err(Error::field(
+                f,
+                "total_time",
+                format!("total time must be positive, got {}", self.time.total_time),
+            ));
         }
         if self.time.output_every == 0 {
             return Err(Error::field(f, "output_every", "must be at least 1 step"));
         }
         if !(self.numerics.damping.is_finite() && self.numerics.damping >= 0.0) {
-            return Err(Error::field(f, "damping", format!("must be >= 0, got {}", self.numerics.damping)));
+            return Err(Error::field(
+                f,
+                "damping",
+                format!("must be >= 0, got {}", self.numerics.damping),
+            ));
         }
         if !(self.numerics.hourglass_kappa.is_finite() && self.numerics.hourglass_kappa >= 0.0) {
-            return Err(Error::field(f, "hourglass_kappa", format!("must be >= 0, got {}", self.numerics.hourglass_kappa)));
+            return Err(Error::field(
+                f,
+                "hourglass_kappa",
+                format!("must be >= 0, got {}", self.numerics.hourglass_kappa),
+            ));
         }
         let nn = self.mesh.nodes.len();
         let check_nodes = |what: &str, nodes: &[u32]| -> Result<()> {
             if let Some(&n) = nodes.iter().find(|&&n| n as usize >= nn) {
-                return Err(Error::field(f, what, format!("node {n} out of range (the mesh has {nn} nodes)")));
+                return Err(Error::field(
+                    f,
+                    what,
+                    format!("node {n} out of range (the mesh has {nn} nodes)"),
+                ));
             }
             Ok(())
         };
@@ -131,7 +176,11 @@ impl Problem {
             check_nodes(&format!("rotation[{i}].nodes"), &c.nodes)?;
             let n = crate::linalg::norm(&c.axis);
             if !((n - 1.0).abs() < 1e-12) {
-                return Err(Error::field(f, format!("rotation[{i}].axis"), "axis must be a unit vector"));
+                return Err(Error::field(
+                    f,
+                    format!("rotation[{i}].axis"),
+                    "axis must be a unit vector",
+                ));
             }
         }
         for (i, c) in bc.forces.iter().enumerate() {
@@ -146,7 +195,11 @@ impl Problem {
             .chain(bc.gravity.iter().map(|c| c.curve));
         for c in curves {
             if !pos(c.duration) {
-                return Err(Error::field(f, "duration", format!("load curve duration must be positive, got {}", c.duration)));
+                return Err(Error::field(
+                    f,
+                    "duration",
+                    format!("load curve duration must be positive, got {}", c.duration),
+                ));
             }
         }
         if !self.additive_constraints {
@@ -157,7 +210,11 @@ impl Problem {
                     return Err(Error::field(
                         f,
                         who.clone(),
-                        format!("node {} DOF {} is already constrained by {prev}", dof / 3, dof % 3),
+                        format!(
+                            "node {} DOF {} is already constrained by {prev}",
+                            dof / 3,
+                            dof % 3
+                        ),
                     ));
                 }
                 owner[dof] = Some(who);

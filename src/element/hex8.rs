@@ -54,7 +54,11 @@ pub fn shape_derivatives_natural(p: [f64; 3]) -> [[f64; 3]; 8] {
         let fx = 1.0 + n[0] * p[0];
         let fy = 1.0 + n[1] * p[1];
         let fz = 1.0 + n[2] * p[2];
-        d[a] = [n[0] * fy * fz / 8.0, n[1] * fx * fz / 8.0, n[2] * fx * fy / 8.0];
+        d[a] = [
+            n[0] * fy * fz / 8.0,
+            n[1] * fx * fz / 8.0,
+            n[2] * fx * fy / 8.0,
+        ];
     }
     d
 }
@@ -91,7 +95,9 @@ pub fn shape_gradients_at(x: &[[f64; 3]; 8], p: [f64; 3]) -> ([[f64; 3]; 8], f64
 
 /// The 8 points of the 2x2x2 Gauss rule (all weights 1).
 fn gauss_points() -> impl Iterator<Item = [f64; 3]> {
-    NATURAL.iter().map(|n| [n[0] * GAUSS, n[1] * GAUSS, n[2] * GAUSS])
+    NATURAL
+        .iter()
+        .map(|n| [n[0] * GAUSS, n[1] * GAUSS, n[2] * GAUSS])
 }
 
 /// Exact volume of the trilinear hexahedron.
@@ -106,7 +112,11 @@ pub fn volume(x: &[[f64; 3]; 8]) -> f64 {
 /// (`0..8` a corner, `8` the centre). A valid element has all of them positive.
 pub fn min_corner_jacobian(x: &[[f64; 3]; 8]) -> (f64, usize) {
     let mut best = (f64::INFINITY, 0);
-    for (k, p) in NATURAL.iter().chain(std::iter::once(&[0.0, 0.0, 0.0])).enumerate() {
+    for (k, p) in NATURAL
+        .iter()
+        .chain(std::iter::once(&[0.0, 0.0, 0.0]))
+        .enumerate()
+    {
         let d = det(&jacobian(x, *p));
         if d < best.0 || d.is_nan() {
             best = (d, k);
@@ -170,7 +180,9 @@ pub fn hourglass_vectors(x: &[[f64; 3]; 8], d: &[[f64; 3]; 8]) -> [[f64; 4]; 8] 
     for a in 0..8 {
         for alpha in 0..4 {
             gamma[a][alpha] = HOURGLASS_BASE[alpha][a]
-                - (d[a][0] * a_mat[0][alpha] + d[a][1] * a_mat[1][alpha] + d[a][2] * a_mat[2][alpha]);
+                - (d[a][0] * a_mat[0][alpha]
+                    + d[a][1] * a_mat[1][alpha]
+                    + d[a][2] * a_mat[2][alpha]);
         }
     }
     gamma
@@ -180,15 +192,24 @@ pub fn hourglass_vectors(x: &[[f64; 3]; 8], d: &[[f64; 3]; 8]) -> [[f64; 4]; 8] 
 /// `lambda = K - 2 mu / 3` (NiftySim's choice).
 pub fn hourglass_stiffness(kappa: f64, volume: f64, mu: f64, bulk: f64, d: &[[f64; 3]; 8]) -> f64 {
     let lambda = bulk - 2.0 * mu / 3.0;
-    let sum_sq: f64 = d.iter().map(|g| g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sum();
+    let sum_sq: f64 = d
+        .iter()
+        .map(|g| g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
+        .sum();
     kappa * volume * (lambda + 2.0 * mu) * sum_sq / 8.0
 }
 
 /// A stable-time-step length scale of the element: its volume over its largest face
 /// area (the usual estimate for hexahedra, e.g. Hallquist's LS-DYNA theory manual).
 pub fn characteristic_length(x: &[[f64; 3]; 8]) -> f64 {
-    const FACES: [[usize; 4]; 6] =
-        [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]];
+    const FACES: [[usize; 4]; 6] = [
+        [0, 3, 2, 1],
+        [4, 5, 6, 7],
+        [0, 1, 5, 4],
+        [1, 2, 6, 5],
+        [2, 3, 7, 6],
+        [3, 0, 4, 7],
+    ];
     let mut amax: f64 = 0.0;
     for f in FACES {
         let p = |k: usize| x[f[k]];

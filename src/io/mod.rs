@@ -1,3 +1,5 @@
 pub mod atomic;
-pub mod vtu;
 pub mod niftysim;
+pub mod output;
+pub mod scenario;
+pub mod vtu;

@@ -75,7 +75,10 @@ impl Ctx<'_> {
             .into_iter()
             .map(|(t, l)| match t.parse::<u32>() {
                 Ok(v) => Ok((v, l)),
-                _ => Err(self.err_at(l, format!("{what}: `{t}` is not a non-negative integer index"))),
+                _ => Err(self.err_at(
+                    l,
+                    format!("{what}: `{t}` is not a non-negative integer index"),
+                )),
             })
             .collect()
     }
@@ -83,11 +86,12 @@ impl Ctx<'_> {
     fn attr_usize(&self, n: Node, name: &str) -> Result<Option<usize>> {
         match n.attribute(name) {
             None => Ok(None),
-            Some(v) => v
-                .trim()
-                .parse::<usize>()
-                .map(Some)
-                .map_err(|_| self.err(n, format!("attribute {name}=\"{v}\" is not a non-negative integer"))),
+            Some(v) => v.trim().parse::<usize>().map(Some).map_err(|_| {
+                self.err(
+                    n,
+                    format!("attribute {name}=\"{v}\" is not a non-negative integer"),
+                )
+            }),
         }
     }
 
@@ -101,7 +105,10 @@ impl Ctx<'_> {
             Some(c) => {
                 let v = self.floats(c, name)?;
                 if v.len() != 1 {
-                    return Err(self.err(c, format!("<{name}> must hold one number, found {}", v.len())));
+                    return Err(self.err(
+                        c,
+                        format!("<{name}> must hold one number, found {}", v.len()),
+                    ));
                 }
                 Ok(Some(v[0]))
             }
@@ -116,32 +123,64 @@ pub fn read(path: &Path, variant: GradientVariant, niftysim_timing: bool) -> Res
     parse(&text, &path.display().to_string(), variant, niftysim_timing)
 }
 
-pub fn parse(text: &str, file: &str, variant: GradientVariant, niftysim_timing: bool) -> Result<Problem> {
+pub fn parse(
+    text: &str,
+    file: &str,
+    variant: GradientVariant,
+    niftysim_timing: bool,
+) -> Result<Problem> {
     let doc = Document::parse(text).map_err(|e| {
         let pos = e.pos();
-        Error::input(file, Location::Line(pos.row as usize), format!("malformed XML: {e}"))
+        Error::input(
+            file,
+            Location::Line(pos.row as usize),
+            format!("malformed XML: {e}"),
+        )
     })?;
-    let cx = Ctx { file: file.to_string(), doc: &doc };
+    let cx = Ctx {
+        file: file.to_string(),
+        doc: &doc,
+    };
     let root = doc.root_element();
     if !root.has_tag_name("Model") {
-        return Err(cx.err(root, format!("root element is <{}>, expected <Model>", root.tag_name().name())));
+        return Err(cx.err(
+            root,
+            format!(
+                "root element is <{}>, expected <Model>",
+                root.tag_name().name()
+            ),
+        ));
     }
 
     // ---- nodes
-    let nodes_el = cx.child(root, "Nodes").ok_or_else(|| cx.err(root, "missing <Nodes>"))?;
+    let nodes_el = cx
+        .child(root, "Nodes")
+        .ok_or_else(|| cx.err(root, "missing <Nodes>"))?;
     if let Some(dof) = nodes_el.attribute("DOF") {
         if dof.trim() != "3" {
-            return Err(cx.err(nodes_el, format!("<Nodes DOF=\"{dof}\">: only 3 DOFs per node are supported")));
+            return Err(cx.err(
+                nodes_el,
+                format!("<Nodes DOF=\"{dof}\">: only 3 DOFs per node are supported"),
+            ));
         }
     }
     let coords = cx.floats(nodes_el, "node coordinate")?;
     if coords.len() % 3 != 0 {
-        return Err(cx.err(nodes_el, format!("<Nodes> holds {} numbers, not a multiple of 3", coords.len())));
+        return Err(cx.err(
+            nodes_el,
+            format!(
+                "<Nodes> holds {} numbers, not a multiple of 3",
+                coords.len()
+            ),
+        ));
     }
     let nodes: Vec<[f64; 3]> = coords.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
     if let Some(nn) = cx.attr_usize(nodes_el, "NumNodes")? {
         if nn != nodes.len() {
-            return Err(cx.err(nodes_el, format!("NumNodes=\"{nn}\" but {} nodes are listed", nodes.len())));
+            return Err(cx.err(
+                nodes_el,
+                format!("NumNodes=\"{nn}\" but {} nodes are listed", nodes.len()),
+            ));
         }
     }
 
@@ -153,11 +192,20 @@ pub fn parse(text: &str, file: &str, variant: GradientVariant, niftysim_timing: 
         any_elements = true;
         let ty = el.attribute("Type").unwrap_or("");
         if ty != "H8" {
-            return Err(cx.err(el, format!("element type \"{ty}\" is not supported (only H8 hexahedra)")));
+            return Err(cx.err(
+                el,
+                format!("element type \"{ty}\" is not supported (only H8 hexahedra)"),
+            ));
         }
         let idx = cx.indices(el, "element node index")?;
         if idx.len() % 8 != 0 {
-            return Err(cx.err(el, format!("<Elements> holds {} indices, not a multiple of 8", idx.len())));
+            return Err(cx.err(
+                el,
+                format!(
+                    "<Elements> holds {} indices, not a multiple of 8",
+                    idx.len()
+                ),
+            ));
         }
         let start = elements.len();
         for c in idx.chunks(8) {
@@ -166,7 +214,13 @@ pub fn parse(text: &str, file: &str, variant: GradientVariant, niftysim_timing: 
         }
         if let Some(ne) = cx.attr_usize(el, "NumEls")? {
             if ne != elements.len() - start {
-                return Err(cx.err(el, format!("NumEls=\"{ne}\" but {} elements are listed", elements.len() - start)));
+                return Err(cx.err(
+                    el,
+                    format!(
+                        "NumEls=\"{ne}\" but {} elements are listed",
+                        elements.len() - start
+                    ),
+                ));
             }
         }
     }
@@ -176,9 +230,12 @@ pub fn parse(text: &str, file: &str, variant: GradientVariant, niftysim_timing: 
     let ne = elements.len();
 
     // ---- system parameters
-    let sp = cx.child(root, "SystemParams").ok_or_else(|| cx.err(root, "missing <SystemParams>"))?;
+    let sp = cx
+        .child(root, "SystemParams")
+        .ok_or_else(|| cx.err(root, "missing <SystemParams>"))?;
     let req = |name: &str| -> Result<f64> {
-        cx.scalar(sp, name)?.ok_or_else(|| cx.err(sp, format!("<SystemParams> lacks <{name}>")))
+        cx.scalar(sp, name)?
+            .ok_or_else(|| cx.err(sp, format!("<SystemParams> lacks <{name}>")))
     };
     let dt = req("TimeStep")?;
     let total_time = req("TotalTime")?;
@@ -195,20 +252,40 @@ pub fn parse(text: &str, file: &str, variant: GradientVariant, niftysim_timing: 
     // ---- element sets and materials
     let mut materials = Vec::new();
     let mut element_material = vec![u32::MAX; ne];
-    for (si, set) in root.children().filter(|c| c.has_tag_name("ElementSet")).enumerate() {
-        let mat = cx.child(set, "Material").ok_or_else(|| cx.err(set, "<ElementSet> lacks <Material>"))?;
+    for (si, set) in root
+        .children()
+        .filter(|c| c.has_tag_name("ElementSet"))
+        .enumerate()
+    {
+        let mat = cx
+            .child(set, "Material")
+            .ok_or_else(|| cx.err(set, "<ElementSet> lacks <Material>"))?;
         let ty = mat.attribute("Type").unwrap_or("");
         if ty != "NH" {
-            return Err(cx.err(mat, format!("material type \"{ty}\" is not supported (only NH, neo-Hookean)")));
+            return Err(cx.err(
+                mat,
+                format!("material type \"{ty}\" is not supported (only NH, neo-Hookean)"),
+            ));
         }
-        let ep = cx.child(mat, "ElasticParams").ok_or_else(|| cx.err(mat, "<Material> lacks <ElasticParams>"))?;
+        let ep = cx
+            .child(mat, "ElasticParams")
+            .ok_or_else(|| cx.err(mat, "<Material> lacks <ElasticParams>"))?;
         let params = cx.floats(ep, "elastic parameter")?;
         if params.len() != 2 {
-            return Err(cx.err(ep, format!("NH needs 2 elastic parameters (mu K), found {}", params.len())));
+            return Err(cx.err(
+                ep,
+                format!(
+                    "NH needs 2 elastic parameters (mu K), found {}",
+                    params.len()
+                ),
+            ));
         }
         let (mu, bulk) = (params[0], params[1]);
         if mu <= 0.0 || bulk <= 0.0 {
-            return Err(cx.err(ep, format!("moduli must be positive: mu = {mu}, K = {bulk}")));
+            return Err(cx.err(
+                ep,
+                format!("moduli must be positive: mu = {mu}, K = {bulk}"),
+            ));
         }
         let density = match cx.scalar(mat, "Density")?.or(default_density) {
             Some(r) if r > 0.0 => r,
@@ -216,7 +293,11 @@ pub fn parse(text: &str, file: &str, variant: GradientVariant, niftysim_timing: 
             None => return Err(cx.err(mat, "no <Density> in <Material> or <SystemParams>")),
         };
         let mi = materials.len() as u32;
-        materials.push(MaterialSpec { name: format!("ElementSet{si}"), law: NeoHookean { mu, bulk }, density });
+        materials.push(MaterialSpec {
+            name: format!("ElementSet{si}"),
+            law: NeoHookean { mu, bulk },
+            density,
+        });
         let mut members = cx.indices(set, "element set member")?;
         let size = cx.attr_usize(set, "Size")?;
         if size == Some(ne) && members.len() < ne {
@@ -227,12 +308,18 @@ pub fn parse(text: &str, file: &str, variant: GradientVariant, niftysim_timing: 
         }
         if let Some(sz) = size {
             if sz != members.len() {
-                return Err(cx.err(set, format!("Size=\"{sz}\" but {} elements are listed", members.len())));
+                return Err(cx.err(
+                    set,
+                    format!("Size=\"{sz}\" but {} elements are listed", members.len()),
+                ));
             }
         }
         for (e, l) in members {
             if e as usize >= ne {
-                return Err(cx.err_at(l, format!("element set member {e} out of range (the model has {ne} elements)")));
+                return Err(cx.err_at(
+                    l,
+                    format!("element set member {e} out of range (the model has {ne} elements)"),
+                ));
             }
             element_material[e as usize] = mi;
         }
@@ -241,26 +328,41 @@ pub fn parse(text: &str, file: &str, variant: GradientVariant, niftysim_timing: 
         return Err(cx.err(root, "no <ElementSet>: elements have no material"));
     }
     if let Some(e) = element_material.iter().position(|&m| m == u32::MAX) {
-        return Err(cx.err_at(element_lines[e], format!("element {e} is in no <ElementSet>")));
+        return Err(cx.err_at(
+            element_lines[e],
+            format!("element {e} is in no <ElementSet>"),
+        ));
     }
 
     // ---- constraints
     let nn = nodes.len();
-    let whole_run = |shape| LoadCurve { shape, start: 0.0, duration: total_time };
+    let whole_run = |shape| LoadCurve {
+        shape,
+        start: 0.0,
+        duration: total_time,
+    };
     let mut bc = BoundaryConditions::default();
     for c in root.children().filter(|c| c.has_tag_name("Constraint")) {
         let ty = c.attribute("Type").unwrap_or("");
-        let nodes_el = cx.child(c, "Nodes").ok_or_else(|| cx.err(c, "<Constraint> lacks <Nodes>"))?;
+        let nodes_el = cx
+            .child(c, "Nodes")
+            .ok_or_else(|| cx.err(c, "<Constraint> lacks <Nodes>"))?;
         let mut cnodes = Vec::new();
         for (n, l) in cx.indices(nodes_el, "constraint node")? {
             if n as usize >= nn {
-                return Err(cx.err_at(l, format!("constraint node {n} out of range (the model has {nn} nodes)")));
+                return Err(cx.err_at(
+                    l,
+                    format!("constraint node {n} out of range (the model has {nn} nodes)"),
+                ));
             }
             cnodes.push(n);
         }
         if let Some(k) = cx.attr_usize(c, "NumNodes")? {
             if k != cnodes.len() {
-                return Err(cx.err(c, format!("NumNodes=\"{k}\" but {} nodes are listed", cnodes.len())));
+                return Err(cx.err(
+                    c,
+                    format!("NumNodes=\"{k}\" but {} nodes are listed", cnodes.len()),
+                ));
             }
         }
         let dofs = || -> Result<Vec<usize>> {
@@ -274,27 +376,48 @@ pub fn parse(text: &str, file: &str, variant: GradientVariant, niftysim_timing: 
             }
         };
         let shape = || -> Result<LoadShape> {
-            let s = c.attribute("LoadShape").ok_or_else(|| cx.err(c, "<Constraint> lacks LoadShape"))?;
-            LoadShape::parse(s)
-                .ok_or_else(|| cx.err(c, format!("LoadShape=\"{s}\": expected RAMP, POLY345, STEP, HILLY or RAMPHOLD")))
+            let s = c
+                .attribute("LoadShape")
+                .ok_or_else(|| cx.err(c, "<Constraint> lacks LoadShape"))?;
+            LoadShape::parse(s).ok_or_else(|| {
+                cx.err(
+                    c,
+                    format!("LoadShape=\"{s}\": expected RAMP, POLY345, STEP, HILLY or RAMPHOLD"),
+                )
+            })
         };
         let magnitudes = || -> Result<Vec<f64>> {
-            let m = cx.child(c, "Magnitudes").ok_or_else(|| cx.err(c, "<Constraint> lacks <Magnitudes>"))?;
+            let m = cx
+                .child(c, "Magnitudes")
+                .ok_or_else(|| cx.err(c, "<Constraint> lacks <Magnitudes>"))?;
             let v = cx.floats(m, "magnitude")?;
             match m.attribute("Type") {
                 Some("UNIFORM") => {
                     if v.len() != 1 {
-                        return Err(cx.err(m, format!("UNIFORM magnitudes need 1 value, found {}", v.len())));
+                        return Err(cx.err(
+                            m,
+                            format!("UNIFORM magnitudes need 1 value, found {}", v.len()),
+                        ));
                     }
                     Ok(vec![v[0]; cnodes.len()])
                 }
                 Some("DIFFORM") => {
                     if v.len() != cnodes.len() {
-                        return Err(cx.err(m, format!("DIFFORM magnitudes need one value per node ({}), found {}", cnodes.len(), v.len())));
+                        return Err(cx.err(
+                            m,
+                            format!(
+                                "DIFFORM magnitudes need one value per node ({}), found {}",
+                                cnodes.len(),
+                                v.len()
+                            ),
+                        ));
                     }
                     Ok(v)
                 }
-                other => Err(cx.err(m, format!("Magnitudes Type={other:?}: expected UNIFORM or DIFFORM"))),
+                other => Err(cx.err(
+                    m,
+                    format!("Magnitudes Type={other:?}: expected UNIFORM or DIFFORM"),
+                )),
             }
         };
         match ty {
@@ -303,24 +426,39 @@ pub fn parse(text: &str, file: &str, variant: GradientVariant, niftysim_timing: 
                 for d in dofs()? {
                     mask[d] = true;
                 }
-                bc.fixed.push(Fixed { nodes: cnodes, dofs: mask });
+                bc.fixed.push(Fixed {
+                    nodes: cnodes,
+                    dofs: mask,
+                });
             }
             "Disp" | "Force" => {
                 let curve = whole_run(shape()?);
                 let values = magnitudes()?;
                 for d in dofs()? {
                     if ty == "Disp" {
-                        bc.displacements.push(PrescribedDisplacement { nodes: cnodes.clone(), dof: d, values: values.clone(), curve });
+                        bc.displacements.push(PrescribedDisplacement {
+                            nodes: cnodes.clone(),
+                            dof: d,
+                            values: values.clone(),
+                            curve,
+                        });
                     } else {
-                        bc.forces.push(NodalForce { nodes: cnodes.clone(), dof: d, values: values.clone(), curve });
+                        bc.forces.push(NodalForce {
+                            nodes: cnodes.clone(),
+                            dof: d,
+                            values: values.clone(),
+                            curve,
+                        });
                     }
                 }
             }
             "Gravity" => {
                 let curve = whole_run(shape()?);
-                let mag = cx.scalar(c, "AccelerationMagnitude")?
+                let mag = cx
+                    .scalar(c, "AccelerationMagnitude")?
                     .ok_or_else(|| cx.err(c, "Gravity constraint lacks <AccelerationMagnitude>"))?;
-                let dir_el = cx.child(c, "AccelerationDirection")
+                let dir_el = cx
+                    .child(c, "AccelerationDirection")
                     .ok_or_else(|| cx.err(c, "Gravity constraint lacks <AccelerationDirection>"))?;
                 let dir = cx.floats(dir_el, "acceleration direction")?;
                 if dir.len() != 3 {
@@ -337,13 +475,24 @@ pub fn parse(text: &str, file: &str, variant: GradientVariant, niftysim_timing: 
                 });
             }
             other => {
-                return Err(cx.err(c, format!("constraint type \"{other}\" is not supported (Fix, Disp, Force, Gravity)")));
+                return Err(cx.err(
+                    c,
+                    format!(
+                        "constraint type \"{other}\" is not supported (Fix, Disp, Force, Gravity)"
+                    ),
+                ));
             }
         }
     }
 
-    let mut mesh = Mesh { nodes, elements, element_lines: Some(element_lines), ..Default::default() };
-    mesh.element_sets.insert("all".into(), (0..ne as u32).collect());
+    let mut mesh = Mesh {
+        nodes,
+        elements,
+        element_lines: Some(element_lines),
+        ..Default::default()
+    };
+    mesh.element_sets
+        .insert("all".into(), (0..ne as u32).collect());
     let steps = (total_time / dt).round().max(1.0) as usize;
     let problem = Problem {
         source: file.to_string(),
@@ -351,8 +500,17 @@ pub fn parse(text: &str, file: &str, variant: GradientVariant, niftysim_timing: 
         materials,
         element_material,
         bc,
-        time: TimeSettings { dt, total_time, output_every: (steps / 10).max(1) },
-        numerics: Numerics { damping, hourglass_kappa: kappa, variant, niftysim_timing },
+        time: TimeSettings {
+            dt,
+            total_time,
+            output_every: (steps / 10).max(1),
+        },
+        numerics: Numerics {
+            damping,
+            hourglass_kappa: kappa,
+            variant,
+            niftysim_timing,
+        },
         additive_constraints: true,
     };
     Ok(problem)

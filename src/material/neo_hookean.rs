@@ -139,7 +139,8 @@ pub fn material_tangent(h: &Mat3<f64>, mu: f64, bulk: f64) -> [[[[f64; 3]; 3]; 3
                         * (-2.0 / 3.0 * (Ci[i][j] * d(k, l) + d(i, j) * Ci[k][l])
                             + 2.0 / 9.0 * I1 * Ci[i][j] * Ci[k][l]
                             + 2.0 / 3.0 * I1 * isym);
-                    let vol = bulk * ((2.0 * J - 1.0) * J * Ci[i][j] * Ci[k][l] - 2.0 * J * (J - 1.0) * isym);
+                    let vol = bulk
+                        * ((2.0 * J - 1.0) * J * Ci[i][j] * Ci[k][l] - 2.0 * J * (J - 1.0) * isym);
                     t[i][j][k][l] = iso + vol;
                 }
             }

@@ -57,7 +57,11 @@ pub fn block(origin: [f64; 3], size: [f64; 3], cells: [usize; 3]) -> Mesh {
             }
         }
     }
-    let mut mesh = Mesh { nodes, elements, ..Default::default() };
+    let mut mesh = Mesh {
+        nodes,
+        elements,
+        ..Default::default()
+    };
     let mut sets: [Vec<u32>; 8] = Default::default();
     for k in 0..=nz {
         for j in 0..=ny {
@@ -77,11 +81,14 @@ pub fn block(origin: [f64; 3], size: [f64; 3], cells: [usize; 3]) -> Mesh {
             }
         }
     }
-    let names = ["x_min", "x_max", "y_min", "y_max", "z_min", "z_max", "boundary", "interior"];
+    let names = [
+        "x_min", "x_max", "y_min", "y_max", "z_min", "z_max", "boundary", "interior",
+    ];
     for (name, set) in names.iter().zip(sets) {
         mesh.node_sets.insert(name.to_string(), set);
     }
-    mesh.element_sets.insert("all".into(), (0..mesh.elements.len() as u32).collect());
+    mesh.element_sets
+        .insert("all".into(), (0..mesh.elements.len() as u32).collect());
     mesh
 }
 
@@ -89,9 +96,19 @@ pub fn block(origin: [f64; 3], size: [f64; 3], cells: [usize; 3]) -> Mesh {
 /// each coordinate, uniformly at random from `seed` (faces stay planar). With
 /// `fraction = 0.25` the elements are far from parallelepipeds, which is what the patch
 /// test needs.
-pub fn distorted_block(origin: [f64; 3], size: [f64; 3], cells: [usize; 3], fraction: f64, seed: u64) -> Mesh {
+pub fn distorted_block(
+    origin: [f64; 3],
+    size: [f64; 3],
+    cells: [usize; 3],
+    fraction: f64,
+    seed: u64,
+) -> Mesh {
     let mut mesh = block(origin, size, cells);
-    let h = [size[0] / cells[0] as f64, size[1] / cells[1] as f64, size[2] / cells[2] as f64];
+    let h = [
+        size[0] / cells[0] as f64,
+        size[1] / cells[1] as f64,
+        size[2] / cells[2] as f64,
+    ];
     let mut rng = SplitMix64(seed);
     let interior = mesh.node_sets["interior"].clone();
     for n in interior {

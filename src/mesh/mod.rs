@@ -53,11 +53,19 @@ impl Mesh {
     /// in an element, no inverted or degenerate element, no node outside every element.
     pub fn validate(&self, file: &str) -> Result<()> {
         if self.elements.is_empty() {
-            return Err(Error::input(file, Location::None, "the mesh has no elements"));
+            return Err(Error::input(
+                file,
+                Location::None,
+                "the mesh has no elements",
+            ));
         }
         for (n, x) in self.nodes.iter().enumerate() {
             if !x.iter().all(|v| v.is_finite()) {
-                return Err(Error::input(file, Location::Field(format!("node {n}")), "non-finite coordinate"));
+                return Err(Error::input(
+                    file,
+                    Location::Field(format!("node {n}")),
+                    "non-finite coordinate",
+                ));
             }
         }
         let nn = self.nodes.len();
@@ -86,7 +94,11 @@ impl Mesh {
             let (dmin, at) = hex8::min_corner_jacobian(&x);
             let v = hex8::volume(&x);
             if !(dmin > 0.0) || !(v > 0.0) {
-                let what = if at < 8 { format!("corner {at}") } else { "the centre".to_string() };
+                let what = if at < 8 {
+                    format!("corner {at}")
+                } else {
+                    "the centre".to_string()
+                };
                 return Err(Error::input(
                     file,
                     self.location_of_element(e),
@@ -106,7 +118,11 @@ impl Mesh {
         }
         for (name, set) in &self.node_sets {
             if let Some(&n) = set.iter().find(|&&n| n as usize >= nn) {
-                return Err(Error::input(file, Location::Field(format!("node set `{name}`")), format!("node {n} out of range")));
+                return Err(Error::input(
+                    file,
+                    Location::Field(format!("node set `{name}`")),
+                    format!("node {n} out of range"),
+                ));
             }
         }
         for (name, set) in &self.element_sets {
@@ -130,7 +146,8 @@ impl Mesh {
                 bmax[i] = bmax[i].max(x[i]);
             }
         }
-        let (mut vt, mut vmin, mut vmax, mut lmin, mut jr) = (0.0, f64::INFINITY, 0.0f64, f64::INFINITY, 1.0f64);
+        let (mut vt, mut vmin, mut vmax, mut lmin, mut jr) =
+            (0.0, f64::INFINITY, 0.0f64, f64::INFINITY, 1.0f64);
         for e in 0..self.elements.len() {
             let x = self.element_coords(e);
             let v = hex8::volume(&x);
@@ -138,8 +155,13 @@ impl Mesh {
             vmin = vmin.min(v);
             vmax = vmax.max(v);
             lmin = lmin.min(hex8::characteristic_length(&x));
-            let dets: Vec<f64> = hex8::NATURAL.iter().map(|p| crate::linalg::det(&hex8::jacobian(&x, *p))).collect();
-            let (a, b) = dets.iter().fold((f64::INFINITY, 0.0f64), |(a, b), &d| (a.min(d), b.max(d)));
+            let dets: Vec<f64> = hex8::NATURAL
+                .iter()
+                .map(|p| crate::linalg::det(&hex8::jacobian(&x, *p)))
+                .collect();
+            let (a, b) = dets
+                .iter()
+                .fold((f64::INFINITY, 0.0f64), |(a, b), &d| (a.min(d), b.max(d)));
             jr = jr.min(a / b);
         }
         MeshStats {

@@ -112,7 +112,11 @@ impl PrescribedRotation {
     /// Displacement of reference point `x` at time `t`.
     pub fn displacement(&self, x: &[f64; 3], t: f64, clamp: bool) -> [f64; 3] {
         let r = rotation_matrix(&self.axis, self.angle * self.curve.value(t, clamp));
-        let d = [x[0] - self.point[0], x[1] - self.point[1], x[2] - self.point[2]];
+        let d = [
+            x[0] - self.point[0],
+            x[1] - self.point[1],
+            x[2] - self.point[2],
+        ];
         let rd = crate::linalg::mat_vec(&r, &d);
         [rd[0] - d[0], rd[1] - d[1], rd[2] - d[2]]
     }

@@ -69,8 +69,10 @@ pub fn element_force<T: Real>(
     for a in 0..8 {
         for i in 0..3 {
             let elastic = P[i][0] * d[a][0] + P[i][1] * d[a][1] + P[i][2] * d[a][2];
-            let hourglass =
-                gamma[a][0] * hg[0][i] + gamma[a][1] * hg[1][i] + gamma[a][2] * hg[2][i] + gamma[a][3] * hg[3][i];
+            let hourglass = gamma[a][0] * hg[0][i]
+                + gamma[a][1] * hg[1][i]
+                + gamma[a][2] * hg[2][i]
+                + gamma[a][3] * hg[3][i];
             f[a][i] = elastic + k * hourglass;
         }
     }
@@ -119,21 +121,35 @@ pub const ELEMENT_CHUNK: usize = 256;
 /// Stage `element_forces`: writes the 8x3 force block of every element into `out`.
 /// Returns the smallest index of an element whose `det F` is not positive (or not
 /// finite), if any: the caller stops the run there.
-pub fn element_forces<T: Real>(el: &ElementArrays<T>, u: &[[T; 3]], out: &mut [[[T; 3]; 8]]) -> Option<usize> {
+pub fn element_forces<T: Real>(
+    el: &ElementArrays<T>,
+    u: &[[T; 3]],
+    out: &mut [[[T; 3]; 8]],
+) -> Option<usize> {
     let bad = AtomicUsize::new(usize::MAX);
-    out.par_chunks_mut(ELEMENT_CHUNK).enumerate().for_each(|(c, chunk)| {
-        let base = c * ELEMENT_CHUNK;
-        for (i, fe) in chunk.iter_mut().enumerate() {
-            let e = base + i;
-            let conn = &el.conn[e];
-            let ue: [[T; 3]; 8] = std::array::from_fn(|a| u[conn[a] as usize]);
-            let (f, j) = element_force(&ue, &el.dhdx[e], el.weight[e], &el.gamma[e], el.hg_k[e], el.mu[e], el.bulk[e]);
-            if !(j > T::ZERO && j.is_finite()) {
-                bad.fetch_min(e, Ordering::Relaxed);
+    out.par_chunks_mut(ELEMENT_CHUNK)
+        .enumerate()
+        .for_each(|(c, chunk)| {
+            let base = c * ELEMENT_CHUNK;
+            for (i, fe) in chunk.iter_mut().enumerate() {
+                let e = base + i;
+                let conn = &el.conn[e];
+                let ue: [[T; 3]; 8] = std::array::from_fn(|a| u[conn[a] as usize]);
+                let (f, j) = element_force(
+                    &ue,
+                    &el.dhdx[e],
+                    el.weight[e],
+                    &el.gamma[e],
+                    el.hg_k[e],
+                    el.mu[e],
+                    el.bulk[e],
+                );
+                if !(j > T::ZERO && j.is_finite()) {
+                    bad.fetch_min(e, Ordering::Relaxed);
+                }
+                *fe = f;
             }
-            *fe = f;
-        }
-    });
+        });
     let b = bad.into_inner();
     (b != usize::MAX).then_some(b)
 }

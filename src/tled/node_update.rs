@@ -36,7 +36,10 @@ impl<T: Real> CentralDifference<T> {
     pub fn new(dt: f64, damping: f64, mass: &[f64]) -> Self {
         let h = 0.5 * damping * dt;
         CentralDifference {
-            a: mass.iter().map(|&m| T::from_f64(dt * dt / (m * (1.0 + h)))).collect(),
+            a: mass
+                .iter()
+                .map(|&m| T::from_f64(dt * dt / (m * (1.0 + h))))
+                .collect(),
             c1: T::from_f64((1.0 - h) / (1.0 + h)),
         }
     }
@@ -69,32 +72,42 @@ pub fn node_update<T: Real>(
 ) -> Option<usize> {
     let bad = AtomicUsize::new(usize::MAX);
     let c1 = cd.c1;
-    u_next.par_chunks_mut(NODE_CHUNK).enumerate().for_each(|(c, chunk)| {
-        let base = c * NODE_CHUNK;
-        for (i, un) in chunk.iter_mut().enumerate() {
-            let n = base + i;
-            let f = gather_node(gather, elem_f, n);
-            let r = match r_ext {
-                Some(r) => r[n],
-                None => [T::ZERO; 3],
-            };
-            let a = cd.a[n];
-            let mut finite = true;
-            for k in 0..3 {
-                let v = u[n][k] + a * (r[k] - f[k]) + c1 * (u[n][k] - u_prev[n][k]);
-                finite &= v.is_finite();
-                un[k] = v;
+    u_next
+        .par_chunks_mut(NODE_CHUNK)
+        .enumerate()
+        .for_each(|(c, chunk)| {
+            let base = c * NODE_CHUNK;
+            for (i, un) in chunk.iter_mut().enumerate() {
+                let n = base + i;
+                let f = gather_node(gather, elem_f, n);
+                let r = match r_ext {
+                    Some(r) => r[n],
+                    None => [T::ZERO; 3],
+                };
+                let a = cd.a[n];
+                let mut finite = true;
+                for k in 0..3 {
+                    let v = u[n][k] + a * (r[k] - f[k]) + c1 * (u[n][k] - u_prev[n][k]);
+                    finite &= v.is_finite();
+                    un[k] = v;
+                }
+                if !finite {
+                    bad.fetch_min(n, Ordering::Relaxed);
+                }
             }
-            if !finite {
-                bad.fetch_min(n, Ordering::Relaxed);
-            }
-        }
-    });
+        });
     let b = bad.into_inner();
     (b != usize::MAX).then_some(b)
 }
 
 /// Internal nodal forces `F_int` (reactions at constrained nodes included) from element blocks.
-pub fn gather_all<T: Real>(gather: &NodeGather, elem_f: &[[[T; 3]; 8]], num_nodes: usize) -> Vec<[T; 3]> {
-    (0..num_nodes).into_par_iter().map(|n| gather_node(gather, elem_f, n)).collect()
+pub fn gather_all<T: Real>(
+    gather: &NodeGather,
+    elem_f: &[[[T; 3]; 8]],
+    num_nodes: usize,
+) -> Vec<[T; 3]> {
+    (0..num_nodes)
+        .into_par_iter()
+        .map(|n| gather_node(gather, elem_f, n))
+        .collect()
 }

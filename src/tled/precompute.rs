@@ -85,14 +85,25 @@ impl Discretisation {
             d.weight.push(w);
             d.volume.push(v);
             d.gamma.push(hex8::hourglass_vectors(&x, &g));
-            d.hg_k.push(hex8::hourglass_stiffness(p.numerics.hourglass_kappa, v, m.law.mu, m.law.bulk, &g));
+            d.hg_k.push(hex8::hourglass_stiffness(
+                p.numerics.hourglass_kappa,
+                v,
+                m.law.mu,
+                m.law.bulk,
+                &g,
+            ));
             d.mu.push(m.law.mu);
             d.bulk.push(m.law.bulk);
             d.density.push(m.density);
         }
         // lumped mass, gathered per node in the fixed slot order
         for n in 0..nn {
-            d.mass[n] = d.gather.of(n).iter().map(|&s| d.density[s as usize / 8] * d.volume[s as usize / 8] / 8.0).sum();
+            d.mass[n] = d
+                .gather
+                .of(n)
+                .iter()
+                .map(|&s| d.density[s as usize / 8] * d.volume[s as usize / 8] / 8.0)
+                .sum();
         }
         d.constraints = plan_constraints(p);
         d.loads = plan_loads(p, &d.mass);
@@ -106,7 +117,10 @@ impl Discretisation {
 
 fn plan_constraints(p: &Problem) -> ConstraintPlan {
     let nn = p.mesh.nodes.len();
-    let mut c = ConstraintPlan { constrained: vec![false; 3 * nn], ..Default::default() };
+    let mut c = ConstraintPlan {
+        constrained: vec![false; 3 * nn],
+        ..Default::default()
+    };
     for f in &p.bc.fixed {
         for &n in &f.nodes {
             for k in 0..3 {
@@ -119,8 +133,12 @@ fn plan_constraints(p: &Problem) -> ConstraintPlan {
     c.fixed.sort_unstable();
     c.fixed.dedup();
     for pd in &p.bc.displacements {
-        let entries: Vec<(u32, f64)> =
-            pd.nodes.iter().zip(&pd.values).map(|(&n, &v)| (3 * n + pd.dof as u32, v)).collect();
+        let entries: Vec<(u32, f64)> = pd
+            .nodes
+            .iter()
+            .zip(&pd.values)
+            .map(|(&n, &v)| (3 * n + pd.dof as u32, v))
+            .collect();
         c.prescribed_dofs.extend(entries.iter().map(|e| e.0));
         c.prescribed.push((pd.curve, entries));
     }
@@ -143,8 +161,16 @@ fn plan_constraints(p: &Problem) -> ConstraintPlan {
 fn plan_loads(p: &Problem, mass: &[f64]) -> Vec<LoadGroup> {
     let mut groups = Vec::new();
     for f in &p.bc.forces {
-        let entries = f.nodes.iter().zip(&f.values).map(|(&n, &v)| (3 * n + f.dof as u32, v)).collect();
-        groups.push(LoadGroup { curve: f.curve, entries });
+        let entries = f
+            .nodes
+            .iter()
+            .zip(&f.values)
+            .map(|(&n, &v)| (3 * n + f.dof as u32, v))
+            .collect();
+        groups.push(LoadGroup {
+            curve: f.curve,
+            entries,
+        });
     }
     for g in &p.bc.gravity {
         let nodes: Vec<u32> = match &g.nodes {
@@ -159,7 +185,10 @@ fn plan_loads(p: &Problem, mass: &[f64]) -> Vec<LoadGroup> {
                 }
             }
         }
-        groups.push(LoadGroup { curve: g.curve, entries });
+        groups.push(LoadGroup {
+            curve: g.curve,
+            entries,
+        });
     }
     groups
 }

@@ -125,7 +125,15 @@ impl<T: Real> Simulation<T> {
             self.assemble_external(s);
         }
         let r = has_loads.then_some(self.r_ext.as_slice());
-        if let Some(n) = node_update(&self.disc.gather, &self.cd, &self.elem_f, r, &self.u, &self.u_prev, &mut self.u_next) {
+        if let Some(n) = node_update(
+            &self.disc.gather,
+            &self.cd,
+            &self.elem_f,
+            r,
+            &self.u,
+            &self.u_prev,
+            &mut self.u_next,
+        ) {
             return Err(Error::Diverged {
                 step: s,
                 time: t,
@@ -169,7 +177,10 @@ impl<T: Real> Simulation<T> {
     /// Internal nodal forces at the current state (N), reactions at constrained DOFs included.
     pub fn internal_forces(&mut self) -> Vec<[f64; 3]> {
         element_forces(&self.el, &self.u, &mut self.elem_f);
-        gather_all(&self.disc.gather, &self.elem_f, self.disc.num_nodes).into_iter().map(|f| f.map(T::to_f64)).collect()
+        gather_all(&self.disc.gather, &self.elem_f, self.disc.num_nodes)
+            .into_iter()
+            .map(|f| f.map(T::to_f64))
+            .collect()
     }
 
     /// Kinetic energy from the backward difference `(u_n - u_{n-1}) / dt`, strain energy
@@ -185,7 +196,10 @@ impl<T: Real> Simulation<T> {
             }
             kinetic += 0.5 * self.disc.mass[n] * v2;
         }
-        Energies { kinetic, strain: strain_energy(&self.disc, &u) }
+        Energies {
+            kinetic,
+            strain: strain_energy(&self.disc, &u),
+        }
     }
 
     pub fn total_time(&self) -> f64 {
@@ -195,14 +209,21 @@ impl<T: Real> Simulation<T> {
 
 /// Sets every constrained DOF of `u` at time `t`: fixed DOFs to zero, prescribed DOFs to
 /// the sum of their prescribed values, rotated nodes to the rigid rotation.
-pub fn apply_constraints<T: Real>(d: &Discretisation, reference: &[[f64; 3]], u: &mut [[T; 3]], t: f64, clamp: bool) {
+pub fn apply_constraints<T: Real>(
+    d: &Discretisation,
+    reference: &[[f64; 3]],
+    u: &mut [[T; 3]],
+    t: f64,
+    clamp: bool,
+) {
     let c = &d.constraints;
     for &k in &c.fixed {
         u[k as usize / 3][k as usize % 3] = T::ZERO;
     }
     if !c.prescribed.is_empty() {
         // accumulate in f64, then round once
-        let mut acc: std::collections::BTreeMap<u32, f64> = c.prescribed_dofs.iter().map(|&k| (k, 0.0)).collect();
+        let mut acc: std::collections::BTreeMap<u32, f64> =
+            c.prescribed_dofs.iter().map(|&k| (k, 0.0)).collect();
         for (curve, entries) in &c.prescribed {
             let s = curve.value(t, clamp);
             for &(k, v) in entries {
@@ -238,7 +259,9 @@ pub fn displacement_gradient(d: &Discretisation, u: &[[f64; 3]], e: usize) -> [[
 /// Stored energy of the discretisation (J): `sum_e W_e Psi(H_e) + k_e/2 sum_alpha |h_alpha|^2`.
 /// Its gradient with respect to `u` is exactly the internal force of eq. (4).
 pub fn strain_energy(d: &Discretisation, u: &[[f64; 3]]) -> f64 {
-    let per: Vec<f64> = (0..d.num_elements()).map(|e| element_energy(d, u, e)).collect();
+    let per: Vec<f64> = (0..d.num_elements())
+        .map(|e| element_energy(d, u, e))
+        .collect();
     per.iter().sum()
 }
 

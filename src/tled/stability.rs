@@ -65,7 +65,8 @@ pub fn linear_stiffness_times(d: &Discretisation, v: &[f64], out: &mut [f64]) {
             let mut s = [[0.0; 3]; 3];
             for i in 0..3 {
                 for j in 0..3 {
-                    s[i][j] = d.weight[e] * (d.mu[e] * (h[i][j] + h[j][i]) + if i == j { lambda * tr } else { 0.0 });
+                    s[i][j] = d.weight[e]
+                        * (d.mu[e] * (h[i][j] + h[j][i]) + if i == j { lambda * tr } else { 0.0 });
                 }
             }
             let mut hg = [[0.0; 3]; 4];
@@ -107,14 +108,18 @@ pub fn largest_eigenvalue(d: &Discretisation, max_iter: usize, tol: f64) -> (f64
     let free: Vec<bool> = d.constraints.constrained.iter().map(|c| !c).collect();
     let inv_sqrt_m: Vec<f64> = (0..n).map(|k| 1.0 / d.mass[k / 3].sqrt()).collect();
     let op = |x: &[f64], y: &mut [f64]| {
-        let xs: Vec<f64> = (0..n).map(|k| if free[k] { x[k] * inv_sqrt_m[k] } else { 0.0 }).collect();
+        let xs: Vec<f64> = (0..n)
+            .map(|k| if free[k] { x[k] * inv_sqrt_m[k] } else { 0.0 })
+            .collect();
         linear_stiffness_times(d, &xs, y);
         for k in 0..n {
             y[k] = if free[k] { y[k] * inv_sqrt_m[k] } else { 0.0 };
         }
     };
     let mut rng = crate::mesh::generate::SplitMix64(0x5EED);
-    let mut q: Vec<f64> = (0..n).map(|k| if free[k] { rng.symmetric() } else { 0.0 }).collect();
+    let mut q: Vec<f64> = (0..n)
+        .map(|k| if free[k] { rng.symmetric() } else { 0.0 })
+        .collect();
     let nrm = dot(&q, &q).sqrt();
     if nrm == 0.0 {
         return (0.0, 0);
@@ -205,12 +210,18 @@ fn tridiagonal_max_eigenvalue(a: &[f64], b: &[f64]) -> f64 {
 /// Both estimates of the critical time step.
 pub fn analyse(p: &Problem, d: &Discretisation) -> StabilityReport {
     let est = element_estimates(p);
-    let (limiting_element, element_estimate) =
-        est.iter().enumerate().fold((0, f64::INFINITY), |acc, (e, &v)| if v < acc.1 { (e, v) } else { acc });
+    let (limiting_element, element_estimate) = est.iter().enumerate().fold(
+        (0, f64::INFINITY),
+        |acc, (e, &v)| if v < acc.1 { (e, v) } else { acc },
+    );
     let (lmax, iterations) = largest_eigenvalue(d, 300, 1e-10);
     let omega_max = lmax.max(0.0).sqrt();
     StabilityReport {
-        critical_time_step: if omega_max > 0.0 { 2.0 / omega_max } else { f64::INFINITY },
+        critical_time_step: if omega_max > 0.0 {
+            2.0 / omega_max
+        } else {
+            f64::INFINITY
+        },
         omega_max,
         element_estimate,
         limiting_element,
@@ -219,7 +230,11 @@ pub fn analyse(p: &Problem, d: &Discretisation) -> StabilityReport {
 }
 
 /// Refuses a time step above the critical one (unless `force`).
-pub fn check_time_step(p: &Problem, report: &StabilityReport, force: bool) -> crate::error::Result<()> {
+pub fn check_time_step(
+    p: &Problem,
+    report: &StabilityReport,
+    force: bool,
+) -> crate::error::Result<()> {
     if p.time.dt > report.critical_time_step && !force {
         return Err(crate::error::Error::UnstableTimeStep {
             dt: p.time.dt,

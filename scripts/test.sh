@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# The whole test suite, from a fresh clone on a machine with only Rust and Python:
+#   bash scripts/test.sh
+# 1. sets up the Python environment (.venv, pinned scripts/requirements.txt);
+# 2. regenerates the scikit-fem reference data and fails if it differs from the committed copy;
+# 3. cargo fmt --check and cargo clippy -D warnings;
+# 4. cargo test (unit tests, the `verification` target, doc tests);
+# 5. runs the example scenario and a NiftySim model through the CLI and checks every file
+#    written with meshio (scripts/check_outputs.py).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$(pwd)
+step() { printf '\n==> %s\n' "$*"; }
+
+step "Python environment (.venv)"
+if [ ! -x .venv/bin/python ]; then
+  python3 -m venv .venv
+fi
+.venv/bin/python -m pip install --quiet --disable-pip-version-check -r scripts/requirements.txt
+PY="$ROOT/.venv/bin/python"
+
+step "scikit-fem reference data is reproducible"
+tmpref=$(mktemp -d)
+cp verification/reference/skfem_neohookean.json "$tmpref/committed.json"
+"$PY" scripts/skfem_reference.py
+if ! cmp -s verification/reference/skfem_neohookean.json "$tmpref/committed.json"; then
+  echo "scripts/skfem_reference.py produced different reference data than the committed copy" >&2
+  cp "$tmpref/committed.json" verification/reference/skfem_neohookean.json
+  exit 1
+fi
+
+step "cargo fmt --check"
+cargo fmt --all -- --check
+
+step "cargo clippy -- -D warnings"
+cargo clippy --all-targets -- -D warnings
+
+step "cargo test (unit tests, verification suite, doc tests)"
+cargo test --all-targets
+cargo test --doc
+
+step "CLI runs, outputs checked with meshio"
+cargo build --release --quiet
+BIN="$ROOT/target/release/sticky-lips"
+OUT="$ROOT/target/test-outputs"
+rm -rf "$OUT"
+"$BIN" check examples/cantilever.toml
+"$BIN" run examples/cantilever.toml --out "$OUT/cantilever" --quiet
+"$BIN" run examples/cantilever.toml --out "$OUT/cantilever_f32" --precision f32 --threads 2 --quiet
+SHARED="${STICKY_LIPS_SHARED:-$ROOT/../shared}"
+"$BIN" run "$SHARED/oracle/niftysim/block4_compress.xml" --niftysim-compat --out "$OUT/block4" --quiet
+"$BIN" equilibrium examples/cantilever.toml --out "$OUT/cantilever_static"
+for d in cantilever cantilever_f32 block4 cantilever_static; do
+  STICKY_LIPS_OUT="$OUT/$d" "$PY" -m pytest -q scripts/check_outputs.py
+done
+printf '\nall checks passed\n'

@@ -1,0 +1,547 @@
+//! Scenario files (TOML): mesh source, node sets, materials, boundary conditions and
+//! loads, time stepping, numerics, output. Quantities are SI unless `[units] length`
+//! says otherwise, in which case every length in the file (coordinates, sizes, boxes,
+//! displacement values, rotation points) is converted to metres here, on reading.
+//! Unknown keys are errors (a typo must not be silently ignored). See
+//! `examples/cantilever.toml` for a complete, commented example.
+
+use crate::element::hex8::GradientVariant;
+use crate::error::{Error, Location, Result};
+use crate::material::NeoHookean;
+use crate::mesh::{generate, Mesh};
+use crate::problem::{MaterialSpec, Numerics, Problem, TimeSettings};
+use crate::tled::boundary::{
+    BoundaryConditions, Fixed, Gravity, LoadCurve, LoadShape, NodalForce, PrescribedDisplacement,
+    PrescribedRotation,
+};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioFile {
+    pub title: Option<String>,
+    #[serde(default)]
+    pub units: Units,
+    pub mesh: MeshSection,
+    #[serde(default)]
+    pub node_sets: Vec<NodeSetDef>,
+    pub materials: Vec<MaterialDef>,
+    #[serde(default)]
+    pub fix: Vec<FixDef>,
+    #[serde(default)]
+    pub displacement: Vec<DisplacementDef>,
+    #[serde(default)]
+    pub rotation: Vec<RotationDef>,
+    #[serde(default)]
+    pub force: Vec<ForceDef>,
+    pub gravity: Option<GravityDef>,
+    pub time: TimeDef,
+    #[serde(default)]
+    pub numerics: NumericsDef,
+    #[serde(default)]
+    pub output: OutputDef,
+}
+
+#[derive(Deserialize, Debug, Default)]
+#[serde(deny_unknown_fields)]
+pub struct Units {
+    /// `"m"` (default), `"cm"` or `"mm"`.
+    pub length: Option<String>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSection {
+    /// `"block"`, `"distorted_block"` or `"niftysim"` (nodes, elements and element sets of an XML model).
+    pub generator: String,
+    pub origin: Option<[f64; 3]>,
+    pub size: Option<[f64; 3]>,
+    pub cells: Option<[usize; 3]>,
+    /// Interior node displacement as a fraction of the cell size (`distorted_block`).
+    pub distortion: Option<f64>,
+    pub seed: Option<u64>,
+    /// Mesh file, relative to the scenario file (`niftysim`).
+    pub file: Option<PathBuf>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct NodeSetDef {
+    pub name: String,
+    /// Nodes inside this axis-aligned box (inclusive, with a relative tolerance of 1e-9).
+    pub box_min: Option<[f64; 3]>,
+    pub box_max: Option<[f64; 3]>,
+    /// Explicit node indices.
+    pub nodes: Option<Vec<u32>>,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(untagged)]
+pub enum NodeRef {
+    Set(String),
+    List(Vec<u32>),
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(untagged)]
+pub enum DofRef {
+    Name(String),
+    Index(usize),
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialDef {
+    pub name: String,
+    /// Element set the material applies to (`"all"` by default).
+    pub elements: Option<String>,
+    /// `"neo_hookean"`.
+    pub model: Option<String>,
+    /// Shear modulus (Pa).
+    pub mu: f64,
+    /// Bulk modulus (Pa).
+    #[serde(rename = "K")]
+    pub bulk: f64,
+    /// Density (kg/m^3).
+    pub density: f64,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct FixDef {
+    pub nodes: NodeRef,
+    /// `"all"` or a list of `"x"`, `"y"`, `"z"` (default `"all"`).
+    pub dofs: Option<toml::Value>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct CurveDef {
+    /// `ramp`, `poly345`, `step`, `hilly`, `ramphold`, `smooth_step`.
+    pub shape: Option<String>,
+    /// Start time (s), default 0.
+    pub start: Option<f64>,
+    /// Duration (s), default the whole run.
+    pub duration: Option<f64>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct DisplacementDef {
+    pub nodes: NodeRef,
+    pub dof: DofRef,
+    /// Final displacement (length unit of the file).
+    pub value: f64,
+    #[serde(flatten)]
+    pub curve: CurveDef,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct RotationDef {
+    pub nodes: NodeRef,
+    /// A point on the hinge axis (length unit of the file).
+    pub point: [f64; 3],
+    /// Axis direction (normalised on reading).
+    pub axis: [f64; 3],
+    /// Final angle (rad), right-handed about `axis`.
+    pub angle: f64,
+    #[serde(flatten)]
+    pub curve: CurveDef,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct ForceDef {
+    pub nodes: NodeRef,
+    pub dof: DofRef,
+    /// Force on each node (N).
+    pub value: f64,
+    #[serde(flatten)]
+    pub curve: CurveDef,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct GravityDef {
+    /// Acceleration vector (m/s^2).
+    pub acceleration: [f64; 3],
+    #[serde(flatten)]
+    pub curve: CurveDef,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct TimeDef {
+    /// Time step (s).
+    pub dt: f64,
+    /// Simulated time (s).
+    pub total: f64,
+    /// Steps between output frames (default: 100).
+    pub output_every: Option<usize>,
+}
+
+#[derive(Deserialize, Debug, Default)]
+#[serde(deny_unknown_fields)]
+pub struct NumericsDef {
+    /// Mass-proportional damping `alpha` (1/s), default 0.
+    pub damping: Option<f64>,
+    /// Hourglass coefficient `kappa`, default 0.075 (Table 1).
+    pub hourglass_kappa: Option<f64>,
+    /// `"mean_gradient"` (default) or `"centroid"`.
+    pub variant: Option<GradientVariant>,
+}
+
+#[derive(Deserialize, Debug, Default)]
+#[serde(deny_unknown_fields)]
+pub struct OutputDef {
+    /// Default output directory, relative to the scenario file.
+    pub dir: Option<PathBuf>,
+}
+
+/// A scenario read from disk: the problem and where its outputs go by default.
+pub struct Scenario {
+    pub problem: Problem,
+    pub title: Option<String>,
+    pub default_output: Option<PathBuf>,
+}
+
+pub fn read(path: &Path) -> Result<Scenario> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse(&text, path)
+}
+
+fn line_of(text: &str, span: Option<std::ops::Range<usize>>) -> Location {
+    match span {
+        Some(r) => Location::Line(text[..r.start.min(text.len())].matches('\n').count() + 1),
+        None => Location::None,
+    }
+}
+
+pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
+    let file = path.display().to_string();
+    let f = file.as_str();
+    let sf: ScenarioFile = toml::from_str(text).map_err(|e| {
+        let msg = e.message().to_string();
+        Error::input(f, line_of(text, e.span()), msg)
+    })?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let scale = match sf.units.length.as_deref() {
+        None | Some("m") => 1.0,
+        Some("cm") => 1e-2,
+        Some("mm") => 1e-3,
+        Some(o) => {
+            return Err(Error::field(
+                f,
+                "units.length",
+                format!("unknown unit `{o}` (m, cm or mm)"),
+            ))
+        }
+    };
+    let sc3 = |v: [f64; 3]| v.map(|x| x * scale);
+
+    // ---- mesh
+    let m = &sf.mesh;
+    let need = |v: Option<[f64; 3]>, k: &str| {
+        v.ok_or_else(|| Error::field(f, format!("mesh.{k}"), "required by this generator"))
+    };
+    let mut mesh: Mesh = match m.generator.as_str() {
+        "block" | "distorted_block" => {
+            let cells = m
+                .cells
+                .ok_or_else(|| Error::field(f, "mesh.cells", "required by this generator"))?;
+            if cells.iter().any(|&c| c == 0) {
+                return Err(Error::field(
+                    f,
+                    "mesh.cells",
+                    "every count must be at least 1",
+                ));
+            }
+            let size = sc3(need(m.size, "size")?);
+            if size.iter().any(|&s| !(s > 0.0)) {
+                return Err(Error::field(f, "mesh.size", "every edge must be positive"));
+            }
+            let origin = sc3(m.origin.unwrap_or([0.0; 3]));
+            if m.generator == "block" {
+                generate::block(origin, size, cells)
+            } else {
+                let frac = m.distortion.unwrap_or(0.25);
+                if !(0.0..0.5).contains(&frac) {
+                    return Err(Error::field(
+                        f,
+                        "mesh.distortion",
+                        "must be in [0, 0.5) of the cell size",
+                    ));
+                }
+                generate::distorted_block(origin, size, cells, frac, m.seed.unwrap_or(1))
+            }
+        }
+        "niftysim" => {
+            let rel = m.file.as_ref().ok_or_else(|| {
+                Error::field(f, "mesh.file", "required by the niftysim generator")
+            })?;
+            let p =
+                crate::io::niftysim::read(&base.join(rel), GradientVariant::MeanGradient, false)?;
+            let mut mesh = p.mesh;
+            for n in mesh.nodes.iter_mut() {
+                *n = sc3(*n);
+            }
+            for (i, &mi) in p.element_material.iter().enumerate() {
+                mesh.element_sets
+                    .entry(format!("set{mi}"))
+                    .or_default()
+                    .push(i as u32);
+            }
+            mesh
+        }
+        o => {
+            return Err(Error::field(
+                f,
+                "mesh.generator",
+                format!("unknown generator `{o}` (block, distorted_block, niftysim)"),
+            ))
+        }
+    };
+    mesh.element_sets
+        .entry("all".into())
+        .or_insert_with(|| (0..mesh.elements.len() as u32).collect());
+
+    // ---- node sets
+    for (i, ns) in sf.node_sets.iter().enumerate() {
+        let field = format!("node_sets[{i}] ({})", ns.name);
+        let nodes: Vec<u32> = match (&ns.nodes, ns.box_min, ns.box_max) {
+            (Some(list), None, None) => {
+                let mut l = list.clone();
+                l.sort_unstable();
+                l.dedup();
+                l
+            }
+            (None, Some(lo), Some(hi)) => {
+                let (lo, hi) = (sc3(lo), sc3(hi));
+                let tol = 1e-9
+                    * (0..3)
+                        .map(|k| (hi[k] - lo[k]).abs())
+                        .fold(0.0, f64::max)
+                        .max(1e-12);
+                (0..mesh.nodes.len() as u32)
+                    .filter(|&n| {
+                        let x = mesh.nodes[n as usize];
+                        (0..3).all(|k| x[k] >= lo[k] - tol && x[k] <= hi[k] + tol)
+                    })
+                    .collect()
+            }
+            _ => {
+                return Err(Error::field(
+                    f,
+                    field,
+                    "give either `nodes` or both `box_min` and `box_max`",
+                ))
+            }
+        };
+        if nodes.is_empty() {
+            return Err(Error::field(f, field, "selects no node"));
+        }
+        mesh.node_sets.insert(ns.name.clone(), nodes);
+    }
+    let resolve = |r: &NodeRef, field: &str| -> Result<Vec<u32>> {
+        match r {
+            NodeRef::Set(name) => mesh.node_sets.get(name).cloned().ok_or_else(|| {
+                let known: Vec<&String> = mesh.node_sets.keys().collect();
+                Error::field(
+                    f,
+                    field,
+                    format!("unknown node set `{name}` (known: {known:?})"),
+                )
+            }),
+            NodeRef::List(l) => Ok(l.clone()),
+        }
+    };
+    let dof = |d: &DofRef, field: &str| -> Result<usize> {
+        match d {
+            DofRef::Index(i) if *i < 3 => Ok(*i),
+            DofRef::Name(s) if s == "x" => Ok(0),
+            DofRef::Name(s) if s == "y" => Ok(1),
+            DofRef::Name(s) if s == "z" => Ok(2),
+            _ => Err(Error::field(
+                f,
+                field,
+                format!("`{d:?}` is not a DOF (x, y, z or 0, 1, 2)"),
+            )),
+        }
+    };
+    let total = sf.time.total;
+    let curve = |c: &CurveDef, field: &str, default: LoadShape| -> Result<LoadCurve> {
+        let shape = match &c.shape {
+            None => default,
+            Some(s) => LoadShape::parse(s).ok_or_else(|| {
+                Error::field(
+                    f,
+                    format!("{field}.shape"),
+                    format!(
+                        "unknown shape `{s}` (ramp, poly345, step, hilly, ramphold, smooth_step)"
+                    ),
+                )
+            })?,
+        };
+        let start = c.start.unwrap_or(0.0);
+        let duration = c.duration.unwrap_or(total - start);
+        if !(duration > 0.0) {
+            return Err(Error::field(
+                f,
+                format!("{field}.duration"),
+                format!("must be positive, got {duration}"),
+            ));
+        }
+        Ok(LoadCurve {
+            shape,
+            start,
+            duration,
+        })
+    };
+
+    // ---- materials
+    let mut materials = Vec::new();
+    let mut element_material = vec![u32::MAX; mesh.elements.len()];
+    for (i, md) in sf.materials.iter().enumerate() {
+        if let Some(model) = &md.model {
+            if model != "neo_hookean" {
+                return Err(Error::field(
+                    f,
+                    format!("materials[{i}].model"),
+                    format!("unknown model `{model}` (neo_hookean)"),
+                ));
+            }
+        }
+        let set_name = md.elements.clone().unwrap_or_else(|| "all".into());
+        let set = mesh.element_sets.get(&set_name).ok_or_else(|| {
+            Error::field(
+                f,
+                format!("materials[{i}].elements"),
+                format!("unknown element set `{set_name}`"),
+            )
+        })?;
+        for &e in set {
+            element_material[e as usize] = i as u32;
+        }
+        materials.push(MaterialSpec {
+            name: md.name.clone(),
+            law: NeoHookean {
+                mu: md.mu,
+                bulk: md.bulk,
+            },
+            density: md.density,
+        });
+    }
+    if materials.is_empty() {
+        return Err(Error::field(
+            f,
+            "materials",
+            "at least one material is needed",
+        ));
+    }
+
+    // ---- boundary conditions
+    let mut bc = BoundaryConditions::default();
+    for (i, d) in sf.fix.iter().enumerate() {
+        let field = format!("fix[{i}]");
+        let nodes = resolve(&d.nodes, &format!("{field}.nodes"))?;
+        let mut mask = [false; 3];
+        match &d.dofs {
+            None => mask = [true; 3],
+            Some(toml::Value::String(s)) if s == "all" => mask = [true; 3],
+            Some(toml::Value::Array(a)) => {
+                for v in a {
+                    let r = match v {
+                        toml::Value::String(s) => DofRef::Name(s.clone()),
+                        toml::Value::Integer(k) if *k >= 0 => DofRef::Index(*k as usize),
+                        _ => DofRef::Name(v.to_string()),
+                    };
+                    mask[dof(&r, &format!("{field}.dofs"))?] = true;
+                }
+            }
+            Some(o) => {
+                return Err(Error::field(
+                    f,
+                    format!("{field}.dofs"),
+                    format!("expected \"all\" or a list like [\"x\", \"z\"], got {o}"),
+                ))
+            }
+        }
+        bc.fixed.push(Fixed { nodes, dofs: mask });
+    }
+    for (i, d) in sf.displacement.iter().enumerate() {
+        let field = format!("displacement[{i}]");
+        let nodes = resolve(&d.nodes, &format!("{field}.nodes"))?;
+        let values = vec![d.value * scale; nodes.len()];
+        bc.displacements.push(PrescribedDisplacement {
+            dof: dof(&d.dof, &format!("{field}.dof"))?,
+            nodes,
+            values,
+            curve: curve(&d.curve, &field, LoadShape::Ramp)?,
+        });
+    }
+    for (i, d) in sf.rotation.iter().enumerate() {
+        let field = format!("rotation[{i}]");
+        let n = crate::linalg::norm(&d.axis);
+        if !(n > 0.0) || !n.is_finite() {
+            return Err(Error::field(
+                f,
+                format!("{field}.axis"),
+                "must be a non-zero vector",
+            ));
+        }
+        bc.rotations.push(PrescribedRotation {
+            nodes: resolve(&d.nodes, &format!("{field}.nodes"))?,
+            point: sc3(d.point),
+            axis: d.axis.map(|v| v / n),
+            angle: d.angle,
+            curve: curve(&d.curve, &field, LoadShape::SmoothStep)?,
+        });
+    }
+    for (i, d) in sf.force.iter().enumerate() {
+        let field = format!("force[{i}]");
+        let nodes = resolve(&d.nodes, &format!("{field}.nodes"))?;
+        let values = vec![d.value; nodes.len()];
+        bc.forces.push(NodalForce {
+            dof: dof(&d.dof, &format!("{field}.dof"))?,
+            nodes,
+            values,
+            curve: curve(&d.curve, &field, LoadShape::Step)?,
+        });
+    }
+    if let Some(g) = &sf.gravity {
+        bc.gravity.push(Gravity {
+            nodes: None,
+            acceleration: g.acceleration,
+            curve: curve(&g.curve, "gravity", LoadShape::Step)?,
+        });
+    }
+
+    let nd = &sf.numerics;
+    let problem = Problem {
+        source: file.clone(),
+        mesh,
+        materials,
+        element_material,
+        bc,
+        time: TimeSettings {
+            dt: sf.time.dt,
+            total_time: sf.time.total,
+            output_every: sf.time.output_every.unwrap_or(100),
+        },
+        numerics: Numerics {
+            damping: nd.damping.unwrap_or(0.0),
+            hourglass_kappa: nd.hourglass_kappa.unwrap_or(0.075),
+            variant: nd.variant.unwrap_or_default(),
+            niftysim_timing: false,
+        },
+        additive_constraints: false,
+    };
+    problem.validate()?;
+    Ok(Scenario {
+        problem,
+        title: sf.title,
+        default_output: sf.output.dir.map(|d| base.join(d)),
+    })
+}
