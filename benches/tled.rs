@@ -1,1 +1,305 @@
-fn main() {}
+//! Criterion benchmarks of the TLED time step, stage by stage (see `benches/README.md`).
+//!
+//! Benchmark ids are `STAGE/PRECISION/threads=K/hex=N`:
+//!
+//! - `element_forces`: stage 1, the 8x3 internal-force block of every element
+//!   (`tled::element_forces::element_forces`) at a fixed deformed state;
+//! - `node_update`: stage 2, gather of the element blocks at every node and the
+//!   central-difference update (`tled::node_update::node_update`), fixed inputs;
+//! - `step`: one full `Simulation::step` (both stages, constraints, buffer rotation),
+//!   the state advancing from one iteration to the next as in a run.
+//!
+//! The model is NiftySim's `timing_block20` setup scaled to `N = n^3` hexahedra: a block
+//! of side 0.04 m, neo-Hookean mu = 1000 Pa, K = 10000 Pa, density 1000 kg/m^3, damping
+//! 50 1/s, hourglass kappa 0.075, centroid gradients, base (`z_min`) fixed, top (`z_max`)
+//! driven in z by a RAMP to -0.004 m over 0.1 s, dt = 1e-4 s. The state is seeded with a
+//! deformed displacement field (lateral bulge and axial compression, zero at the constrained
+//! faces) and advanced a few steps, so every element is in a deformed configuration.
+//!
+//! Throughput is `Elements(N)`: criterion's "elem/s" is element-updates per second for
+//! every stage (for `node_update` too, so that stage times per element add up to `step`).
+//!
+//! Sizes: `STICKY_LIPS_BENCH_SIZES=1000,8000` (default `1000,8000,64000`; any cube
+//! `n^3` is accepted, e.g. `512000` = 80^3; a `k` suffix means thousands, `64k`).
+//! Thread counts: `STICKY_LIPS_BENCH_THREADS=1,2` (default `1,2`).
+//! `STICKY_LIPS_BENCH_STABILITY=1` prints each block's critical time step (Lanczos) first.
+//! Criterion's own flags work after `--`, e.g.
+//! `cargo bench --bench tled -- 'element_forces/f32' --measurement-time 10`.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use rayon::ThreadPool;
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+use sticky_lips::element::hex8::GradientVariant;
+use sticky_lips::material::NeoHookean;
+use sticky_lips::mesh::generate::block;
+use sticky_lips::problem::{MaterialSpec, Numerics, TimeSettings};
+use sticky_lips::tled::boundary::{
+    BoundaryConditions, Fixed, LoadCurve, LoadShape, PrescribedDisplacement,
+};
+use sticky_lips::tled::element_forces::{element_forces, ElementArrays};
+use sticky_lips::tled::node_update::{node_update, CentralDifference};
+use sticky_lips::tled::stability::element_estimates;
+use sticky_lips::tled::Simulation;
+use sticky_lips::{Problem, Real};
+
+/// Side of the block (m), as in `timing_block20.xml`.
+const SIDE: f64 = 0.04;
+/// Top displacement at the end of the ramp (m) and the ramp's duration (s).
+const TOP_DISP: f64 = -0.004;
+const RAMP_TIME: f64 = 0.1;
+/// NiftySim's time step (s).
+const DT: f64 = 1e-4;
+const DAMPING: f64 = 50.0;
+/// Steps run after seeding the state, before any measurement.
+const SEED_STEPS: usize = 5;
+
+fn parse_list(var: &str, default: &str) -> Vec<usize> {
+    let s = std::env::var(var).unwrap_or_else(|_| default.to_string());
+    s.split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|t| !t.is_empty())
+        .map(|t| {
+            let t = t.trim();
+            let (num, mul) = match t.strip_suffix(['k', 'K']) {
+                Some(n) => (n, 1000),
+                None => (t, 1),
+            };
+            num.parse::<usize>()
+                .map(|v| v * mul)
+                .unwrap_or_else(|_| panic!("{var}: cannot parse {t:?} as a count"))
+        })
+        .collect()
+}
+
+/// Cells per side for `n` hexahedra (`n` must be a cube).
+fn cells_per_side(n: usize) -> usize {
+    let c = (n as f64).cbrt().round() as usize;
+    assert!(
+        c >= 1 && c * c * c == n,
+        "STICKY_LIPS_BENCH_SIZES: {n} is not a cube number of hexahedra (1000, 8000, 64000, 512000, ...)"
+    );
+    c
+}
+
+/// The `timing_block20` problem with `c^3` hexahedra.
+fn block_problem(c: usize) -> Problem {
+    let mesh = block([0.0; 3], [SIDE; 3], [c, c, c]);
+    let ne = mesh.elements.len();
+    let base = mesh.node_sets["z_min"].clone();
+    let top = mesh.node_sets["z_max"].clone();
+    let ntop = top.len();
+    let bc = BoundaryConditions {
+        fixed: vec![Fixed {
+            nodes: base,
+            dofs: [true; 3],
+        }],
+        displacements: vec![PrescribedDisplacement {
+            nodes: top,
+            dof: 2,
+            values: vec![TOP_DISP; ntop],
+            curve: LoadCurve {
+                shape: LoadShape::Ramp,
+                start: 0.0,
+                duration: RAMP_TIME,
+            },
+        }],
+        ..Default::default()
+    };
+    let mut p = Problem {
+        source: format!("bench block {c}^3"),
+        mesh,
+        materials: vec![MaterialSpec {
+            name: "block".into(),
+            law: NeoHookean {
+                mu: 1000.0,
+                bulk: 10000.0,
+            },
+            density: 1000.0,
+        }],
+        element_material: vec![0; ne],
+        bc,
+        time: TimeSettings {
+            dt: DT,
+            total_time: RAMP_TIME,
+            output_every: 100,
+        },
+        numerics: Numerics {
+            damping: DAMPING,
+            hourglass_kappa: 0.075,
+            variant: GradientVariant::Centroid,
+            // clamped load curve: the top holds at -0.004 m however long criterion steps
+            niftysim_timing: false,
+        },
+        additive_constraints: false,
+    };
+    // dt = 1e-4 s is stable up to 64k hexahedra (h = 1 mm); finer blocks get half the
+    // smallest per-element estimate L_e / c_e so that long `step` benches cannot diverge.
+    let est = element_estimates(&p).into_iter().fold(f64::INFINITY, f64::min);
+    p.time.dt = DT.min(0.5 * est);
+    if std::env::var_os("STICKY_LIPS_BENCH_STABILITY").is_some() {
+        let d = sticky_lips::tled::precompute::Discretisation::new(&p);
+        let r = sticky_lips::tled::stability::analyse(&p, &d);
+        eprintln!(
+            "block {c}^3: dt = {:.3e} s, critical (2/omega_max) = {:.3e} s, L_e/c_e = {:.3e} s",
+            p.time.dt, r.critical_time_step, r.element_estimate
+        );
+    }
+    p
+}
+
+/// A deformed state that satisfies the constraints at t = 0: zero on the base and top
+/// faces, lateral bulge of 5 % and axial compression of up to 2 % of the side in between.
+fn seed_displacement(p: &Problem) -> Vec<[f64; 3]> {
+    let h = 0.5 * SIDE;
+    p.mesh
+        .nodes
+        .iter()
+        .map(|x| {
+            let s = (std::f64::consts::PI * x[2] / SIDE).sin();
+            [
+                0.05 * (x[0] - h) * s,
+                0.05 * (x[1] - h) * s,
+                -0.02 * SIDE * s * (x[2] / SIDE),
+            ]
+        })
+        .collect()
+}
+
+/// Everything one (size, precision) pair needs: a running simulation in a deformed state,
+/// and the inputs of the two stages taken from it.
+struct Fixture<T: Real> {
+    sim: Simulation<T>,
+    el: ElementArrays<T>,
+    cd: CentralDifference<T>,
+    u: Vec<[T; 3]>,
+    u_prev: Vec<[T; 3]>,
+    u_next: Vec<[T; 3]>,
+    elem_f: Vec<[[T; 3]; 8]>,
+}
+
+impl<T: Real> Fixture<T> {
+    fn new(p: &Problem) -> Self {
+        let mut sim = Simulation::<T>::new(p).expect("bench problem is valid");
+        let u0 = seed_displacement(p);
+        sim.set_state(&u0, &u0);
+        for _ in 0..SEED_STEPS {
+            sim.step().expect("seed steps stay stable");
+        }
+        let el = ElementArrays::<T>::from_discretisation(&sim.disc);
+        let cd = CentralDifference::<T>::new(p.time.dt, p.numerics.damping, &sim.disc.mass);
+        let u = sim.displacement().to_vec();
+        let u_prev = sim.previous_displacement().to_vec();
+        let mut elem_f = vec![[[T::ZERO; 3]; 8]; el.len()];
+        assert_eq!(element_forces(&el, &u, &mut elem_f), None);
+        Fixture {
+            u_next: vec![[T::ZERO; 3]; u.len()],
+            sim,
+            el,
+            cd,
+            u,
+            u_prev,
+            elem_f,
+        }
+    }
+}
+
+/// `iters` calls of `f` on the pool's workers; the wall time of the loop.
+fn timed_in(pool: &ThreadPool, iters: u64, mut f: impl FnMut() + Send) -> Duration {
+    pool.install(|| {
+        let t = Instant::now();
+        for _ in 0..iters {
+            f();
+        }
+        t.elapsed()
+    })
+}
+
+fn bench_precision<T: Real>(c: &mut Criterion, p: &Problem, pools: &[(usize, ThreadPool)]) {
+    let ne = p.mesh.elements.len();
+    let mut fx = Fixture::<T>::new(p);
+    let size = format!("hex={ne}");
+    for (k, pool) in pools {
+        let id = BenchmarkId::new(format!("{}/threads={k}", T::NAME), &size);
+
+        let mut g = c.benchmark_group("element_forces");
+        g.throughput(Throughput::Elements(ne as u64));
+        g.bench_function(id.clone(), |b| {
+            b.iter_custom(|iters| {
+                timed_in(pool, iters, || {
+                    let r = element_forces(&fx.el, black_box(&fx.u), &mut fx.elem_f);
+                    assert!(r.is_none(), "element inverted in the seeded state");
+                    black_box(&mut fx.elem_f);
+                })
+            })
+        });
+        g.finish();
+
+        let mut g = c.benchmark_group("node_update");
+        g.throughput(Throughput::Elements(ne as u64));
+        g.bench_function(id.clone(), |b| {
+            b.iter_custom(|iters| {
+                timed_in(pool, iters, || {
+                    let r = node_update(
+                        &fx.sim.disc.gather,
+                        &fx.cd,
+                        black_box(&fx.elem_f),
+                        None,
+                        &fx.u,
+                        &fx.u_prev,
+                        &mut fx.u_next,
+                    );
+                    assert!(r.is_none(), "non-finite node update");
+                    black_box(&mut fx.u_next);
+                })
+            })
+        });
+        g.finish();
+
+        let mut g = c.benchmark_group("step");
+        g.throughput(Throughput::Elements(ne as u64));
+        g.bench_function(id.clone(), |b| {
+            b.iter_custom(|iters| {
+                timed_in(pool, iters, || {
+                    if let Err(e) = fx.sim.step() {
+                        panic!("bench simulation diverged: {e}");
+                    }
+                })
+            })
+        });
+        g.finish();
+    }
+}
+
+fn tled(c: &mut Criterion) {
+    let threads = parse_list("STICKY_LIPS_BENCH_THREADS", "1,2");
+    let pools: Vec<(usize, ThreadPool)> = threads
+        .iter()
+        .map(|&k| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(k)
+                .build()
+                .unwrap();
+            (k, pool)
+        })
+        .collect();
+    for n in parse_list("STICKY_LIPS_BENCH_SIZES", "1000,8000,64000") {
+        let p = block_problem(cells_per_side(n));
+        bench_precision::<f64>(c, &p, &pools);
+        bench_precision::<f32>(c, &p, &pools);
+    }
+}
+
+fn config() -> Criterion {
+    // Group-level settings would override criterion's command-line flags; these do not.
+    Criterion::default()
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(3))
+}
+
+criterion_group! {
+    name = benches;
+    config = config();
+    targets = tled
+}
+criterion_main!(benches);

@@ -2,4 +2,7 @@
 //! The catalogue (claim, paper equation, tolerance and why) is `verification/README.md`.
 
 mod common;
+mod inputs;
 mod niftysim;
+mod element;
+mod patch;

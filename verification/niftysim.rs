@@ -211,39 +211,26 @@ fn niftysim_urand_element_forces_f32() {
 
 #[test]
 fn niftysim_f32_runs() {
+    let table = |dir: &str, name: &str, q: &str| vec3_table(&read_table(&oracle_dir().join(dir).join(format!("{name}_{q}.txt"))));
     for name in MODELS {
         let (sim, fint) = run_model::<f32>(name);
         let u = sim.displacement_f64();
         let mut line = format!("{name} f32:");
-        for (dir, tol) in [("out_f64", 2e-4), ("out_f32", 2e-4)] {
-            let out = oracle_dir().join(dir);
-            let u_ref = vec3_table(&read_table(&out.join(format!("{name}_U.txt"))));
-            let f_ref = vec3_table(&read_table(&out.join(format!("{name}_Fint.txt"))));
-            let du = rel_max_diff(&u, &u_ref);
-            let df = rel_max_diff(&fint, &f_ref);
-            line += &format!(" vs {dir}: U {du:.2e} Fint {df:.2e};");
-            // 2e-4: the README states NiftySim's own f32 build differs from its f64 build by 1e-6..1e-4
-            // relative on these models; an f32 run may drift by as much as that, plus a factor 2 for the
-            // two f32 runs (ours and NiftySim's) drifting independently when compared with out_f32
-            assert!(
-                du <= tol,
-                "{name}: f32 displacement differs from NiftySim {dir} by {du:e}"
-            );
-            assert!(
-                df <= tol,
-                "{name}: f32 internal force differs from NiftySim {dir} by {df:e}"
-            );
+        for (q, ours) in [("U", &u), ("Fint", &fint)] {
+            // NiftySim's own f32 build against its f64 build, for this model and quantity
+            let nifty = rel_max_diff(&table("out_f32", name, q), &table("out_f64", name, q));
+            // the README states 1e-6..1e-4 for NiftySim's f32 drift; the measured drift of its final
+            // internal forces is larger on the cantilever (5.4e-4: the nodal force is a near-cancelling
+            // sum of stiff element forces). An f32 run may drift by as much as NiftySim's own f32 build:
+            // bound = 2 x max(1e-4, NiftySim's measured drift), the 2 for two f32 runs drifting
+            // independently when compared with each other
+            let tol = 2.0 * nifty.max(1e-4);
+            let d64 = rel_max_diff(ours, &table("out_f64", name, q));
+            let d32 = rel_max_diff(ours, &table("out_f32", name, q));
+            line += &format!(" {q}: vs f64 {d64:.2e} vs f32 {d32:.2e} (NiftySim f32 vs f64 {nifty:.2e}, tol {tol:.1e});");
+            assert!(d64 <= tol, "{name}: f32 {q} differs from NiftySim out_f64 by {d64:e} (tol {tol:e})");
+            assert!(d32 <= tol, "{name}: f32 {q} differs from NiftySim out_f32 by {d32:e} (tol {tol:e})");
         }
-        let u_ref32 = vec3_table(&read_table(
-            &oracle_dir().join("out_f32").join(format!("{name}_U.txt")),
-        ));
-        let u_ref64 = vec3_table(&read_table(
-            &oracle_dir().join("out_f64").join(format!("{name}_U.txt")),
-        ));
-        line += &format!(
-            " (NiftySim f32 vs f64: U {:.2e})",
-            rel_max_diff(&u_ref32, &u_ref64)
-        );
         println!("{line}");
     }
 }

@@ -426,12 +426,6 @@ pub fn write_vtu_to(w: &mut dyn Write, frame: &VtuFrame) -> io::Result<()> {
     Ok(())
 }
 
-/// The whole .vtu file as bytes. Inconsistent frames yield an empty vector;
-/// use [`try_vtu_bytes`] to get the validation error instead.
-pub fn vtu_bytes(frame: &VtuFrame) -> Vec<u8> {
-    try_vtu_bytes(frame).unwrap_or_default()
-}
-
 /// The whole .vtu file as bytes, or an `InvalidInput` error naming the
 /// offending array when lengths are inconsistent.
 pub fn try_vtu_bytes(frame: &VtuFrame) -> io::Result<Vec<u8>> {
@@ -667,7 +661,6 @@ mod tests {
             time: Some(t),
         };
         let bytes = try_vtu_bytes(&frame).unwrap();
-        assert_eq!(bytes, vtu_bytes(&frame));
         let doc = String::from_utf8(bytes).unwrap();
         assert!(doc.contains("header_type=\"UInt64\""));
         assert!(doc.contains("<Piece NumberOfPoints=\"12\" NumberOfCells=\"2\">"));
@@ -745,7 +738,6 @@ mod tests {
         let e = try_vtu_bytes(&frame).unwrap_err();
         assert_eq!(e.kind(), io::ErrorKind::InvalidInput);
         assert!(e.to_string().contains("'displacement'"), "{e}");
-        assert!(vtu_bytes(&frame).is_empty());
 
         let frame = VtuFrame {
             points: &pts,
