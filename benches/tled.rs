@@ -134,7 +134,9 @@ fn block_problem(c: usize) -> Problem {
     };
     // dt = 1e-4 s is stable up to 64k hexahedra (h = 1 mm); finer blocks get half the
     // smallest per-element estimate L_e / c_e so that long `step` benches cannot diverge.
-    let est = element_estimates(&p).into_iter().fold(f64::INFINITY, f64::min);
+    let est = element_estimates(&p)
+        .into_iter()
+        .fold(f64::INFINITY, f64::min);
     p.time.dt = DT.min(0.5 * est);
     if std::env::var_os("STICKY_LIPS_BENCH_STABILITY").is_some() {
         let d = sticky_lips::tled::precompute::Discretisation::new(&p);

@@ -6,6 +6,13 @@
 //! and figures. See `ARCHITECTURE.md` for the data flow of one time step and
 //! `paper/equations.md` for where each equation of the paper lives.
 
+// Index loops mirror the tensor notation of the equations (`H_ij = sum_a u_a,i D_a,j`);
+// iterator chains would hide it.
+#![allow(clippy::needless_range_loop)]
+// `!(x > 0.0)` is deliberate throughout input validation: unlike `x <= 0.0` it also
+// rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod driver;
 pub mod element;
 pub mod error;

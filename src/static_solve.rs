@@ -468,7 +468,6 @@ impl<'a> Model<'a> {
         }
         let pattern = self.pattern.as_ref();
         let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
-        let ta = std::time::Instant::now();
         let mut values = vec![0.0; row_idx.len()];
         let (d, free_of) = (&self.d, &self.free_of);
         let ne = d.num_elements();
@@ -507,7 +506,6 @@ impl<'a> Model<'a> {
                 }
             }
         }
-        eprintln!("assembly {:?}", ta.elapsed());
         if !values.iter().all(|v| v.is_finite()) {
             return Err("non-finite tangent".into());
         }
@@ -520,13 +518,10 @@ impl<'a> Model<'a> {
                 s
             }
         };
-        let t0 = std::time::Instant::now();
         let matrix = SparseColMatRef::new(self.pattern.as_ref(), &values);
         let lu = Lu::try_new_with_symbolic(symbolic, matrix)
             .map_err(|e| format!("LU factorisation of the tangent failed (singular?): {e:?}"))?;
-        let t1 = t0.elapsed();
         lu.solve_in_place(ColMut::from_slice_mut(&mut rhs));
-        eprintln!("factor {:?} solve {:?} nnz {}", t1, t0.elapsed() - t1, values.len());
         Ok(rhs)
     }
 }
@@ -917,23 +912,5 @@ mod tests {
         assert!(res.u.iter().flatten().all(|&v| v == 0.0));
         assert_eq!(res.newton_iterations, 0);
         assert_eq!(res.residual_norm, 0.0);
-    }
-
-    #[test]
-    fn timing_big() {
-        let n = 16;
-        let mesh = distorted_block([0.0; 3], [0.03; 3], [n, n, n], 0.2, 5);
-        let x_max = mesh.node_sets["x_max"].clone();
-        let bc = BoundaryConditions {
-            fixed: rollers(&mesh),
-            displacements: vec![PrescribedDisplacement { values: vec![0.006; x_max.len()], nodes: x_max, dof: 0, curve: ramp() }],
-            ..Default::default()
-        };
-        let p = problem(mesh, GradientVariant::MeanGradient, bc);
-        let t = std::time::Instant::now();
-        let res = solve_equilibrium(&p, &StaticOptions { load_steps: 2, ..Default::default() }).unwrap();
-        let lt = lateral_stretch(1.2);
-        let err = relative_error(&res.u, &p.mesh.nodes, |x| [0.2 * x[0], (lt - 1.0) * x[1], (lt - 1.0) * x[2]]);
-        eprintln!("big: {:?} {} steps {} its res {:.3e}/{:.3e} err {err:.3e}", t.elapsed(), res.load_steps, res.newton_iterations, res.residual_norm, res.reaction_scale);
     }
 }

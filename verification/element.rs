@@ -16,26 +16,55 @@ use sticky_lips::tled::precompute::Discretisation;
 use sticky_lips::tled::solver::element_energy;
 use sticky_lips::Real;
 
-pub const VARIANTS: [GradientVariant; 2] = [GradientVariant::MeanGradient, GradientVariant::Centroid];
+pub const VARIANTS: [GradientVariant; 2] =
+    [GradientVariant::MeanGradient, GradientVariant::Centroid];
 
 /// A one-material problem (mu = 1000 Pa, K = 10000 Pa, rho = 1000 kg/m^3) on `mesh`.
-pub fn problem(mesh: Mesh, variant: GradientVariant, bc: BoundaryConditions, time: TimeSettings, damping: f64) -> Problem {
+pub fn problem(
+    mesh: Mesh,
+    variant: GradientVariant,
+    bc: BoundaryConditions,
+    time: TimeSettings,
+    damping: f64,
+) -> Problem {
     let ne = mesh.elements.len();
     Problem {
         source: "verification".into(),
         mesh,
-        materials: vec![MaterialSpec { name: "tissue".into(), law: NeoHookean { mu: 1000.0, bulk: 10000.0 }, density: 1000.0 }],
+        materials: vec![MaterialSpec {
+            name: "tissue".into(),
+            law: NeoHookean {
+                mu: 1000.0,
+                bulk: 10000.0,
+            },
+            density: 1000.0,
+        }],
         element_material: vec![0; ne],
         bc,
         time,
-        numerics: Numerics { damping, hourglass_kappa: 0.075, variant, niftysim_timing: false },
+        numerics: Numerics {
+            damping,
+            hourglass_kappa: 0.075,
+            variant,
+            niftysim_timing: false,
+        },
         additive_constraints: false,
     }
 }
 
 /// `problem` with no loads and the brief's default time settings (only the element matters).
 pub fn bare_problem(mesh: Mesh, variant: GradientVariant) -> Problem {
-    problem(mesh, variant, BoundaryConditions::default(), TimeSettings { dt: 1e-4, total_time: 1e-3, output_every: 1 }, 0.0)
+    problem(
+        mesh,
+        variant,
+        BoundaryConditions::default(),
+        TimeSettings {
+            dt: 1e-4,
+            total_time: 1e-3,
+            output_every: 1,
+        },
+        0.0,
+    )
 }
 
 /// Nodal displacements of element `e`.
@@ -126,7 +155,8 @@ fn element_force_is_energy_gradient() {
                         up[n][i] += delta;
                         let mut um = u.clone();
                         um[n][i] -= delta;
-                        let fd = (element_energy(&d, &up, e) - element_energy(&d, &um, e)) / (2.0 * delta);
+                        let fd = (element_energy(&d, &up, e) - element_energy(&d, &um, e))
+                            / (2.0 * delta);
                         err = err.max((fd - f[a][i]).abs());
                     }
                 }
@@ -136,7 +166,10 @@ fn element_force_is_energy_gradient() {
     }
     println!("element_force_is_energy_gradient: max rel error {worst:.2e}");
     // 1e-6: three orders above the expected FD error (see delta above), far below any real bug
-    assert!(worst < 1e-6, "element force differs from the energy gradient by {worst:e} (relative)");
+    assert!(
+        worst < 1e-6,
+        "element force differs from the energy gradient by {worst:e} (relative)"
+    );
 }
 
 #[test]
@@ -149,7 +182,11 @@ fn hourglass_force_vanishes_for_linear_fields() {
             let d = Discretisation::new(&bare_problem(mesh.clone(), variant));
             let mut rng = SplitMix64(200 + seed);
             let g = random_matrix(&mut rng, 0.2);
-            let c = [0.01 * rng.symmetric(), 0.01 * rng.symmetric(), 0.01 * rng.symmetric()];
+            let c = [
+                0.01 * rng.symmetric(),
+                0.01 * rng.symmetric(),
+                0.01 * rng.symmetric(),
+            ];
             let u = linear_field(&mesh, &g, c);
             for e in 0..d.num_elements() {
                 // f_HG_a = k sum_alpha gamma_a,alpha (sum_b gamma_b,alpha u_b), from disc.gamma
@@ -161,12 +198,20 @@ fn hourglass_force_vanishes_for_linear_fields() {
                 let total = force_of::<f64>(&d, &u, e);
                 for a in 0..8 {
                     for i in 0..3 {
-                        assert!((total[a][i] - elastic[a][i] - hg[a][i]).abs() <= 1e-13 * max_abs8(&elastic));
+                        assert!(
+                            (total[a][i] - elastic[a][i] - hg[a][i]).abs()
+                                <= 1e-13 * max_abs8(&elastic)
+                        );
                     }
                 }
                 // and the test can fail: an hourglass mode (base vector h_1 in x) is resisted
-                let mode: [[f64; 3]; 8] =
-                    std::array::from_fn(|a| [1e-4 * sticky_lips::element::hex8::HOURGLASS_BASE[0][a], 0.0, 0.0]);
+                let mode: [[f64; 3]; 8] = std::array::from_fn(|a| {
+                    [
+                        1e-4 * sticky_lips::element::hex8::HOURGLASS_BASE[0][a],
+                        0.0,
+                        0.0,
+                    ]
+                });
                 let hgm = hourglass_force(&d, &mode, e);
                 hg_mode_ratio = hg_mode_ratio.min(max_abs8(&hgm) / (d.hg_k[e] * 1e-4));
             }
@@ -175,9 +220,15 @@ fn hourglass_force_vanishes_for_linear_fields() {
     println!("hourglass_force_vanishes_for_linear_fields: max |f_HG|/|f_el| {worst:.2e}; hourglass-mode response >= {hg_mode_ratio:.2} k|u|");
     // 1e-12: gamma^T X = 0 holds to round-off (|gamma| |X| eps); the elastic force of a 20 % gradient is
     // ~1e12 times larger than k eps |u|, so any structural error shows far above it
-    assert!(worst < 1e-12, "hourglass force of a linear field is {worst:e} of the elastic force");
+    assert!(
+        worst < 1e-12,
+        "hourglass force of a linear field is {worst:e} of the elastic force"
+    );
     // an hourglass mode must produce a force of order k |u| (0.1 k|u| is a conservative floor)
-    assert!(hg_mode_ratio > 0.1, "hourglass mode not resisted: {hg_mode_ratio}");
+    assert!(
+        hg_mode_ratio > 0.1,
+        "hourglass mode not resisted: {hg_mode_ratio}"
+    );
 }
 
 fn hourglass_force(d: &Discretisation, ue: &[[f64; 3]; 8], e: usize) -> [[f64; 3]; 8] {
@@ -190,7 +241,9 @@ fn hourglass_force(d: &Discretisation, ue: &[[f64; 3]; 8], e: usize) -> [[f64; 3
             }
         }
     }
-    std::array::from_fn(|a| std::array::from_fn(|i| d.hg_k[e] * (0..4).map(|al| gamma[a][al] * h[al][i]).sum::<f64>()))
+    std::array::from_fn(|a| {
+        std::array::from_fn(|i| d.hg_k[e] * (0..4).map(|al| gamma[a][al] * h[al][i]).sum::<f64>())
+    })
 }
 
 /// Max element force of a large rigid motion, relative to the max element force of a 1 % strain.
@@ -202,11 +255,21 @@ fn rigid_motion_ratio<T: Real>(variant: GradientVariant) -> (f64, f64) {
         let d = Discretisation::new(&bare_problem(mesh.clone(), variant));
         let mut rng = SplitMix64(300 + seed);
         let r = rotation(random_unit(&mut rng), 40f64.to_radians());
-        let rm: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| r[i][j] - if i == j { 1.0 } else { 0.0 }));
+        let rm: [[f64; 3]; 3] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| r[i][j] - if i == j { 1.0 } else { 0.0 })
+        });
         hmax = hmax.max(rm.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs())));
-        let c = [0.02 * rng.symmetric(), 0.02 * rng.symmetric(), 0.02 * rng.symmetric()];
+        let c = [
+            0.02 * rng.symmetric(),
+            0.02 * rng.symmetric(),
+            0.02 * rng.symmetric(),
+        ];
         let u = linear_field(&mesh, &rm, c);
-        let strain = linear_field(&mesh, &[[0.01, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]], [0.0; 3]);
+        let strain = linear_field(
+            &mesh,
+            &[[0.01, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+            [0.0; 3],
+        );
         for e in 0..d.num_elements() {
             let f = force_of::<T>(&d, &u, e);
             let fs = force_of::<f64>(&d, &strain, e);
@@ -229,8 +292,14 @@ fn rigid_motion_gives_no_force() {
             tol(f64::EPSILON),
             tol(f32::EPSILON as f64)
         );
-        assert!(r64 < tol(f64::EPSILON), "{variant:?} f64: rigid motion force {r64:e} of a 1 % strain force");
-        assert!(r32 < tol(f32::EPSILON as f64), "{variant:?} f32: rigid motion force {r32:e} of a 1 % strain force");
+        assert!(
+            r64 < tol(f64::EPSILON),
+            "{variant:?} f64: rigid motion force {r64:e} of a 1 % strain force"
+        );
+        assert!(
+            r32 < tol(f32::EPSILON as f64),
+            "{variant:?} f32: rigid motion force {r32:e} of a 1 % strain force"
+        );
     }
 }
 
@@ -250,8 +319,9 @@ fn pk2_stress_is_energy_derivative() {
     for trial in 0..20 {
         let h = random_h(&mut rng, 0.1 + 0.2 * (trial as f64 / 19.0));
         let (s, _) = pk2_stress(&h, mu, bulk);
-        let p: [[f64; 3]; 3] =
-            std::array::from_fn(|i| std::array::from_fn(|j| s[i][j] + (0..3).map(|k| h[i][k] * s[k][j]).sum::<f64>()));
+        let p: [[f64; 3]; 3] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| s[i][j] + (0..3).map(|k| h[i][k] * s[k][j]).sum::<f64>())
+        });
         let pmax = p.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
         for i in 0..3 {
             for j in 0..3 {
@@ -259,7 +329,9 @@ fn pk2_stress_is_energy_derivative() {
                 hp[i][j] += delta;
                 let mut hm = h;
                 hm[i][j] -= delta;
-                let fd = (strain_energy_density(&hp, mu, bulk) - strain_energy_density(&hm, mu, bulk)) / (2.0 * delta);
+                let fd = (strain_energy_density(&hp, mu, bulk)
+                    - strain_energy_density(&hm, mu, bulk))
+                    / (2.0 * delta);
                 worst = worst.max((fd - p[i][j]).abs() / pmax);
             }
         }
@@ -281,24 +353,37 @@ fn material_tangent_is_stress_derivative() {
     let pairs = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2)];
     for trial in 0..20 {
         let h = random_h(&mut rng, 0.1 + 0.2 * (trial as f64 / 19.0));
-        let f: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| h[i][j] + if i == j { 1.0 } else { 0.0 }));
+        let f: [[f64; 3]; 3] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| h[i][j] + if i == j { 1.0 } else { 0.0 })
+        });
         let finv_t = sticky_lips::linalg::transpose(&sticky_lips::linalg::inverse(&f));
         let cc = material_tangent(&h, mu, bulk);
-        let ccmax = cc.iter().flatten().flatten().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        let ccmax = cc
+            .iter()
+            .flatten()
+            .flatten()
+            .flatten()
+            .fold(0.0f64, |m, v| m.max(v.abs()));
         for (k, l) in pairs {
             let mut de = [[0.0; 3]; 3];
             de[k][l] = if k == l { delta } else { 0.5 * delta };
             de[l][k] = de[k][l];
             let dh = sticky_lips::linalg::mul(&finv_t, &de);
-            let hp: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| h[i][j] + dh[i][j]));
-            let hm: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| h[i][j] - dh[i][j]));
+            let hp: [[f64; 3]; 3] =
+                std::array::from_fn(|i| std::array::from_fn(|j| h[i][j] + dh[i][j]));
+            let hm: [[f64; 3]; 3] =
+                std::array::from_fn(|i| std::array::from_fn(|j| h[i][j] - dh[i][j]));
             let (sp, _) = pk2_stress(&hp, mu, bulk);
             let (sm, _) = pk2_stress(&hm, mu, bulk);
             for i in 0..3 {
                 for j in 0..3 {
                     let fd = (sp[i][j] - sm[i][j]) / (2.0 * delta);
                     // CC_ijKL dE_KL / delta (dE symmetric: both (k,l) and (l,k) entries)
-                    let an: f64 = (0..3).flat_map(|a| (0..3).map(move |b| (a, b))).map(|(a, b)| cc[i][j][a][b] * de[a][b]).sum::<f64>() / delta;
+                    let an: f64 = (0..3)
+                        .flat_map(|a| (0..3).map(move |b| (a, b)))
+                        .map(|(a, b)| cc[i][j][a][b] * de[a][b])
+                        .sum::<f64>()
+                        / delta;
                     worst = worst.max((fd - an).abs() / ccmax);
                 }
             }
@@ -307,5 +392,8 @@ fn material_tangent_is_stress_derivative() {
     println!("material_tangent_is_stress_derivative: max rel error {worst:.2e}");
     // 1e-7: three orders above the FD error (round-off eps |S| / delta ~ 2e-16 * 1e4 / 1e-6 = 2e-6 Pa
     // against |CC| ~ 1e4 Pa: 2e-10; truncation ~ delta^2 |S'''| similar)
-    assert!(worst < 1e-7, "material tangent differs from dS/dE by {worst:e}");
+    assert!(
+        worst < 1e-7,
+        "material tangent differs from dS/dE by {worst:e}"
+    );
 }

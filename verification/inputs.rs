@@ -1,9 +1,9 @@
 //! Bad input never panics and never silently runs: every malformed input gets an error
 //! naming the file and the line or field.
 
+use std::path::Path;
 use sticky_lips::element::hex8::GradientVariant;
 use sticky_lips::io::{niftysim, scenario};
-use std::path::Path;
 
 const GOOD_XML: &str = r#"<?xml version="1.0"?>
 <Model>
@@ -43,7 +43,8 @@ const GOOD_XML: &str = r#"<?xml version="1.0"?>
 "#;
 
 fn xml_err(text: &str) -> String {
-    let r = niftysim::parse(text, "model.xml", GradientVariant::MeanGradient, false).and_then(|p| p.validate().map(|_| p));
+    let r = niftysim::parse(text, "model.xml", GradientVariant::MeanGradient, false)
+        .and_then(|p| p.validate().map(|_| p));
     match r {
         Ok(_) => panic!("expected an error for:\n{text}"),
         Err(e) => e.to_string(),
@@ -59,24 +60,83 @@ fn good_xml_is_accepted() {
 #[test]
 fn malformed_xml_names_file_and_line() {
     let cases: Vec<(String, &str, &str)> = vec![
-        (GOOD_XML.replace("</Nodes>", "</Nodez>"), "model.xml:", "malformed XML"),
-        (GOOD_XML.replace("0.01 0.0 0.0\n", "0.01 abc 0.0\n"), "model.xml:5:", "not a finite number"),
-        (GOOD_XML.replace("0 1 2 3 4 5 6 7", "0 1 2 3 4 5 6 9"), "model.xml:14:", "out of range"),
-        (GOOD_XML.replace("0 1 2 3 4 5 6 7", "0 1 2 3 4 5 6"), "model.xml:13:", "not a multiple of 8"),
-        (GOOD_XML.replace("0 1 2 3 4 5 6 7", "0 3 2 1 4 7 6 5"), "model.xml:14:", "inverted"),
-        (GOOD_XML.replace("0 1 2 3 4 5 6 7", "0 1 2 3 4 5 6 6"), "model.xml:14:", "repeats a node"),
-        (GOOD_XML.replace("1000.0 10000.0", "-1000.0 10000.0"), "model.xml:", "moduli must be positive"),
-        (GOOD_XML.replace("<TimeStep>0.0001</TimeStep>", "<TimeStep>0</TimeStep>"), "model.xml:", "TimeStep> must be positive"),
-        (GOOD_XML.replace("<TimeStep>0.0001</TimeStep>", ""), "model.xml:", "lacks <TimeStep>"),
-        (GOOD_XML.replace("<Density>1000.0</Density>", ""), "model.xml:", "no <Density>"),
-        (GOOD_XML.replace("0 1 2 3\n      </Nodes>", "0 1 2 30\n      </Nodes>"), "model.xml:", "constraint node 30 out of range"),
-        (GOOD_XML.replace("Type=\"H8\"", "Type=\"T4\""), "model.xml:", "not supported"),
-        (GOOD_XML.replace("NumNodes=\"8\"", "NumNodes=\"9\""), "model.xml:", "NumNodes"),
-        (GOOD_XML.replace("DOF=\"all\"", "DOF=\"w\""), "model.xml:", "expected 0, 1, 2 or all"),
+        (
+            GOOD_XML.replace("</Nodes>", "</Nodez>"),
+            "model.xml:",
+            "malformed XML",
+        ),
+        (
+            GOOD_XML.replace("0.01 0.0 0.0\n", "0.01 abc 0.0\n"),
+            "model.xml:5:",
+            "not a finite number",
+        ),
+        (
+            GOOD_XML.replace("0 1 2 3 4 5 6 7", "0 1 2 3 4 5 6 9"),
+            "model.xml:14:",
+            "out of range",
+        ),
+        (
+            GOOD_XML.replace("0 1 2 3 4 5 6 7", "0 1 2 3 4 5 6"),
+            "model.xml:13:",
+            "not a multiple of 8",
+        ),
+        (
+            GOOD_XML.replace("0 1 2 3 4 5 6 7", "0 3 2 1 4 7 6 5"),
+            "model.xml:14:",
+            "inverted",
+        ),
+        (
+            GOOD_XML.replace("0 1 2 3 4 5 6 7", "0 1 2 3 4 5 6 6"),
+            "model.xml:14:",
+            "repeats a node",
+        ),
+        (
+            GOOD_XML.replace("1000.0 10000.0", "-1000.0 10000.0"),
+            "model.xml:",
+            "moduli must be positive",
+        ),
+        (
+            GOOD_XML.replace("<TimeStep>0.0001</TimeStep>", "<TimeStep>0</TimeStep>"),
+            "model.xml:",
+            "TimeStep> must be positive",
+        ),
+        (
+            GOOD_XML.replace("<TimeStep>0.0001</TimeStep>", ""),
+            "model.xml:",
+            "lacks <TimeStep>",
+        ),
+        (
+            GOOD_XML.replace("<Density>1000.0</Density>", ""),
+            "model.xml:",
+            "no <Density>",
+        ),
+        (
+            GOOD_XML.replace("0 1 2 3\n      </Nodes>", "0 1 2 30\n      </Nodes>"),
+            "model.xml:",
+            "constraint node 30 out of range",
+        ),
+        (
+            GOOD_XML.replace("Type=\"H8\"", "Type=\"T4\""),
+            "model.xml:",
+            "not supported",
+        ),
+        (
+            GOOD_XML.replace("NumNodes=\"8\"", "NumNodes=\"9\""),
+            "model.xml:",
+            "NumNodes",
+        ),
+        (
+            GOOD_XML.replace("DOF=\"all\"", "DOF=\"w\""),
+            "model.xml:",
+            "expected 0, 1, 2 or all",
+        ),
     ];
     for (text, loc, msg) in cases {
         let e = xml_err(&text);
-        assert!(e.starts_with(loc) && e.contains(msg), "expected `{loc}` ... `{msg}`, got: {e}");
+        assert!(
+            e.starts_with(loc) && e.contains(msg),
+            "expected `{loc}` ... `{msg}`, got: {e}"
+        );
     }
 }
 
@@ -84,9 +144,15 @@ fn malformed_xml_names_file_and_line() {
 fn node_in_no_element_is_an_error() {
     let text = GOOD_XML
         .replace("NumNodes=\"8\">", "NumNodes=\"9\">")
-        .replace("0.0 0.01 0.01\n   </Nodes>", "0.0 0.01 0.01\n      0.5 0.5 0.5\n   </Nodes>");
+        .replace(
+            "0.0 0.01 0.01\n   </Nodes>",
+            "0.0 0.01 0.01\n      0.5 0.5 0.5\n   </Nodes>",
+        );
     let e = xml_err(&text);
-    assert!(e.contains("node 8") && e.contains("belongs to no element"), "{e}");
+    assert!(
+        e.contains("node 8") && e.contains("belongs to no element"),
+        "{e}"
+    );
 }
 
 const GOOD_TOML: &str = r#"
@@ -129,30 +195,72 @@ fn good_toml_is_accepted() {
 #[test]
 fn malformed_toml_names_file_and_line_or_field() {
     let cases: Vec<(String, &str)> = vec![
-        (GOOD_TOML.replace("cells = [2, 2, 2]", "cells = [2, 2, 2"), "case.toml:"),
-        (GOOD_TOML.replace("mu = 800.0", "mu = \"soft\""), "case.toml:9:"),
-        (GOOD_TOML.replace("mu = 800.0", "mu = 800.0\nshear = 1.0"), "case.toml:"),
+        (
+            GOOD_TOML.replace("cells = [2, 2, 2]", "cells = [2, 2, 2"),
+            "case.toml:",
+        ),
+        (
+            GOOD_TOML.replace("mu = 800.0", "mu = \"soft\""),
+            "case.toml:9:",
+        ),
+        (
+            GOOD_TOML.replace("mu = 800.0", "mu = 800.0\nshear = 1.0"),
+            "case.toml:",
+        ),
         (GOOD_TOML.replace("density = 1050.0", ""), "case.toml:"),
-        (GOOD_TOML.replace("mu = 800.0", "mu = -800.0"), "field `materials[0] (tissue).mu`"),
-        (GOOD_TOML.replace("K = 7000.0", "K = 0.0"), "field `materials[0] (tissue).K`"),
-        (GOOD_TOML.replace("density = 1050.0", "density = 0.0"), "density"),
+        (
+            GOOD_TOML.replace("mu = 800.0", "mu = -800.0"),
+            "field `materials[0] (tissue).mu`",
+        ),
+        (
+            GOOD_TOML.replace("K = 7000.0", "K = 0.0"),
+            "field `materials[0] (tissue).K`",
+        ),
+        (
+            GOOD_TOML.replace("density = 1050.0", "density = 0.0"),
+            "density",
+        ),
         (GOOD_TOML.replace("dt = 1e-4", "dt = -1e-4"), "field `dt`"),
-        (GOOD_TOML.replace("nodes = \"z_max\"", "nodes = \"top\""), "unknown node set `top`"),
-        (GOOD_TOML.replace("nodes = \"z_max\"", "nodes = [1, 2, 900]"), "node 900 out of range"),
-        (GOOD_TOML.replace("dof = \"z\"", "dof = \"w\""), "field `displacement[0].dof`"),
-        (GOOD_TOML.replace("nodes = \"z_max\"", "nodes = \"z_min\""), "already constrained"),
-        (GOOD_TOML.replace("generator = \"block\"", "generator = \"sphere\""), "field `mesh.generator`"),
-        (GOOD_TOML.replace("cells = [2, 2, 2]", "cells = [2, 0, 2]"), "field `mesh.cells`"),
+        (
+            GOOD_TOML.replace("nodes = \"z_max\"", "nodes = \"top\""),
+            "unknown node set `top`",
+        ),
+        (
+            GOOD_TOML.replace("nodes = \"z_max\"", "nodes = [1, 2, 900]"),
+            "node 900 out of range",
+        ),
+        (
+            GOOD_TOML.replace("dof = \"z\"", "dof = \"w\""),
+            "field `displacement[0].dof`",
+        ),
+        (
+            GOOD_TOML.replace("nodes = \"z_max\"", "nodes = \"z_min\""),
+            "already constrained",
+        ),
+        (
+            GOOD_TOML.replace("generator = \"block\"", "generator = \"sphere\""),
+            "field `mesh.generator`",
+        ),
+        (
+            GOOD_TOML.replace("cells = [2, 2, 2]", "cells = [2, 0, 2]"),
+            "field `mesh.cells`",
+        ),
     ];
     for (text, want) in cases {
         let e = toml_err(&text);
-        assert!(e.starts_with("case.toml") && e.contains(want), "expected `{want}`, got: {e}");
+        assert!(
+            e.starts_with("case.toml") && e.contains(want),
+            "expected `{want}`, got: {e}"
+        );
     }
 }
 
 #[test]
 fn missing_file_is_an_io_error_naming_it() {
-    let e = scenario::read(Path::new("/nonexistent/case.toml")).err().unwrap().to_string();
+    let e = scenario::read(Path::new("/nonexistent/case.toml"))
+        .err()
+        .unwrap()
+        .to_string();
     assert!(e.contains("/nonexistent/case.toml"), "{e}");
 }
 
@@ -163,21 +271,51 @@ fn missing_file_is_an_io_error_naming_it() {
 fn unstable_time_step_is_refused_and_a_forced_run_stops_cleanly() {
     use sticky_lips::driver::{run, Progress, RunOptions};
     use sticky_lips::Precision;
-    let s = scenario::parse(&GOOD_TOML.replace("dt = 1e-4", "dt = 2e-3").replace("total = 0.01", "total = 0.4"), Path::new("case.toml")).unwrap();
+    let s = scenario::parse(
+        &GOOD_TOML
+            .replace("dt = 1e-4", "dt = 2e-3")
+            .replace("total = 0.01", "total = 0.4"),
+        Path::new("case.toml"),
+    )
+    .unwrap();
     let dir = std::env::temp_dir().join(format!("sticky-lips-unstable-{}", std::process::id()));
-    let mut opts = RunOptions { out: dir.clone(), precision: Precision::F64, threads: 1, force_dt: false, progress: Progress::Quiet };
-    let e = run(&s.problem, &opts).err().expect("must refuse").to_string();
-    assert!(e.contains("exceeds the critical time step") && e.contains("limiting element is"), "{e}");
+    let mut opts = RunOptions {
+        out: dir.clone(),
+        precision: Precision::F64,
+        threads: 1,
+        force_dt: false,
+        progress: Progress::Quiet,
+    };
+    let e = run(&s.problem, &opts)
+        .err()
+        .expect("must refuse")
+        .to_string();
+    assert!(
+        e.contains("exceeds the critical time step") && e.contains("limiting element is"),
+        "{e}"
+    );
     opts.force_dt = true;
     let e = run(&s.problem, &opts).err().expect("must diverge");
     match &e {
-        sticky_lips::Error::Diverged { step, time, element, node, .. } => {
-            assert!(*step > 0 && *time > 0.0 && (element.is_some() || node.is_some()), "{e}");
+        sticky_lips::Error::Diverged {
+            step,
+            time,
+            element,
+            node,
+            ..
+        } => {
+            assert!(
+                *step > 0 && *time > 0.0 && (element.is_some() || node.is_some()),
+                "{e}"
+            );
         }
         other => panic!("expected divergence, got {other}"),
     }
     let msg = e.to_string();
-    assert!(msg.contains("diverged at step") && msg.contains("t = "), "{msg}");
+    assert!(
+        msg.contains("diverged at step") && msg.contains("t = "),
+        "{msg}"
+    );
     // every frame listed in the .pvd exists and no temporary file is left
     let pvd = std::fs::read_to_string(dir.join("frames.pvd")).unwrap();
     for entry in std::fs::read_dir(&dir).unwrap() {

@@ -2,7 +2,10 @@
 //! The catalogue (claim, paper equation, tolerance and why) is `verification/README.md`.
 
 mod common;
+mod element;
 mod inputs;
 mod niftysim;
-mod element;
 mod patch;
+mod precision;
+mod skfem;
+mod time_integration;

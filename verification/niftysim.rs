@@ -211,7 +211,11 @@ fn niftysim_urand_element_forces_f32() {
 
 #[test]
 fn niftysim_f32_runs() {
-    let table = |dir: &str, name: &str, q: &str| vec3_table(&read_table(&oracle_dir().join(dir).join(format!("{name}_{q}.txt"))));
+    let table = |dir: &str, name: &str, q: &str| {
+        vec3_table(&read_table(
+            &oracle_dir().join(dir).join(format!("{name}_{q}.txt")),
+        ))
+    };
     for name in MODELS {
         let (sim, fint) = run_model::<f32>(name);
         let u = sim.displacement_f64();
@@ -228,8 +232,14 @@ fn niftysim_f32_runs() {
             let d64 = rel_max_diff(ours, &table("out_f64", name, q));
             let d32 = rel_max_diff(ours, &table("out_f32", name, q));
             line += &format!(" {q}: vs f64 {d64:.2e} vs f32 {d32:.2e} (NiftySim f32 vs f64 {nifty:.2e}, tol {tol:.1e});");
-            assert!(d64 <= tol, "{name}: f32 {q} differs from NiftySim out_f64 by {d64:e} (tol {tol:e})");
-            assert!(d32 <= tol, "{name}: f32 {q} differs from NiftySim out_f32 by {d32:e} (tol {tol:e})");
+            assert!(
+                d64 <= tol,
+                "{name}: f32 {q} differs from NiftySim out_f64 by {d64:e} (tol {tol:e})"
+            );
+            assert!(
+                d32 <= tol,
+                "{name}: f32 {q} differs from NiftySim out_f32 by {d32:e} (tol {tol:e})"
+            );
         }
         println!("{line}");
     }

@@ -7,12 +7,14 @@ use sticky_lips::element::hex8::GradientVariant;
 use sticky_lips::material::neo_hookean::pk2_stress;
 use sticky_lips::mesh::generate::distorted_block;
 use sticky_lips::mesh::Mesh;
+use sticky_lips::problem::TimeSettings;
 use sticky_lips::static_solve::{solve_equilibrium, StaticOptions};
-use sticky_lips::tled::boundary::{BoundaryConditions, LoadCurve, LoadShape, PrescribedDisplacement};
+use sticky_lips::tled::boundary::{
+    BoundaryConditions, LoadCurve, LoadShape, PrescribedDisplacement,
+};
 use sticky_lips::tled::element_forces::{element_forces, ElementArrays};
 use sticky_lips::tled::node_update::gather_all;
 use sticky_lips::tled::precompute::Discretisation;
-use sticky_lips::problem::TimeSettings;
 use sticky_lips::Real;
 
 /// A general deformation gradient with det F0 > 0 (no symmetry, ~10-20 % strains).
@@ -28,7 +30,13 @@ pub fn patch(seed: u64) -> Mesh {
 pub fn homogeneous(mesh: &Mesh, f0: &[[f64; 3]; 3]) -> Vec<[f64; 3]> {
     mesh.nodes
         .iter()
-        .map(|x| std::array::from_fn(|i| (0..3).map(|j| (f0[i][j] - if i == j { 1.0 } else { 0.0 }) * x[j]).sum()))
+        .map(|x| {
+            std::array::from_fn(|i| {
+                (0..3)
+                    .map(|j| (f0[i][j] - if i == j { 1.0 } else { 0.0 }) * x[j])
+                    .sum()
+            })
+        })
         .collect()
 }
 
@@ -38,14 +46,19 @@ pub fn internal_forces<T: Real>(d: &Discretisation, u: &[[f64; 3]]) -> Vec<[f64;
     let ut: Vec<[T; 3]> = u.iter().map(|v| v.map(T::from_f64)).collect();
     let mut blocks = vec![[[T::ZERO; 3]; 8]; d.num_elements()];
     assert!(element_forces(&el, &ut, &mut blocks).is_none());
-    gather_all(&d.gather, &blocks, d.num_nodes).into_iter().map(|f| f.map(T::to_f64)).collect()
+    gather_all(&d.gather, &blocks, d.num_nodes)
+        .into_iter()
+        .map(|f| f.map(T::to_f64))
+        .collect()
 }
 
 /// `|P(F0)| h^2`: the size of one element's nodal force under `F0` (the nodal traction scale).
 fn traction_scale(f0: &[[f64; 3]; 3]) -> f64 {
-    let h: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| f0[i][j] - if i == j { 1.0 } else { 0.0 }));
+    let h: [[f64; 3]; 3] =
+        std::array::from_fn(|i| std::array::from_fn(|j| f0[i][j] - if i == j { 1.0 } else { 0.0 }));
     let (s, _) = pk2_stress(&h, 1000.0, 10000.0);
-    let p: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| f0[i][k] * s[k][j]).sum()));
+    let p: [[f64; 3]; 3] =
+        std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| f0[i][k] * s[k][j]).sum()));
     p.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs())) * H * H
 }
 
@@ -56,7 +69,10 @@ fn interior_residual<T: Real>(variant: GradientVariant, seed: u64) -> f64 {
     let f = internal_forces::<T>(&d, &homogeneous(&mesh, &F0));
     let interior = &mesh.node_sets["interior"];
     assert_eq!(interior.len(), 8);
-    let r = interior.iter().map(|&n| f[n as usize].iter().fold(0.0f64, |m, v| m.max(v.abs()))).fold(0.0, f64::max);
+    let r = interior
+        .iter()
+        .map(|&n| f[n as usize].iter().fold(0.0f64, |m, v| m.max(v.abs())))
+        .fold(0.0, f64::max);
     r / traction_scale(&F0)
 }
 
@@ -69,13 +85,22 @@ fn patch_test_forces() {
         println!("patch_test_forces seed {seed}: mean_gradient f64 {mg64:.2e} f32 {mg32:.2e}; centroid f64 {c64:.2e}");
         // an interior node sums 8 element contributions of size ~|P| h^2, each the result of ~100
         // roundings: 1e-12 (~4500 eps64) bounds the cancellation with margin
-        assert!(mg64 < 1e-12, "seed {seed}: mean-gradient patch residual {mg64:e}");
+        assert!(
+            mg64 < 1e-12,
+            "seed {seed}: mean-gradient patch residual {mg64:e}"
+        );
         // same reasoning in f32: ~4500 eps32 = 5e-4 would be the same margin; 1e-4 suffices in practice
         // because the gradients are rounded once and then shared by neighbours
-        assert!(mg32 < 1e-4, "seed {seed}: mean-gradient f32 patch residual {mg32:e}");
+        assert!(
+            mg32 < 1e-4,
+            "seed {seed}: mean-gradient f32 patch residual {mg32:e}"
+        );
         // the centroid element is known to fail the patch test on non-parallelepipeds (NOTES: ~1e-2);
         // 1e-4 is 8 orders above round-off and two below the expected failure
-        assert!(c64 > 1e-4, "seed {seed}: centroid patch residual {c64:e} unexpectedly small");
+        assert!(
+            c64 > 1e-4,
+            "seed {seed}: centroid patch residual {c64:e} unexpectedly small"
+        );
     }
 }
 
@@ -83,8 +108,16 @@ fn patch_test_forces() {
 fn patch_problem(mesh: Mesh, variant: GradientVariant) -> sticky_lips::Problem {
     let u = homogeneous(&mesh, &F0);
     let boundary = mesh.node_sets["boundary"].clone();
-    let time = TimeSettings { dt: 1e-4, total_time: 1e-3, output_every: 1 };
-    let curve = LoadCurve { shape: LoadShape::Ramp, start: 0.0, duration: time.total_time };
+    let time = TimeSettings {
+        dt: 1e-4,
+        total_time: 1e-3,
+        output_every: 1,
+    };
+    let curve = LoadCurve {
+        shape: LoadShape::Ramp,
+        start: 0.0,
+        duration: time.total_time,
+    };
     let mut bc = BoundaryConditions::default();
     for dof in 0..3 {
         bc.displacements.push(PrescribedDisplacement {
@@ -104,7 +137,14 @@ fn patch_test_static() {
             let mesh = patch(seed);
             let exact = homogeneous(&mesh, &F0);
             let p = patch_problem(mesh.clone(), variant);
-            let res = solve_equilibrium(&p, &StaticOptions { tolerance: 1e-13, ..Default::default() }).unwrap();
+            let res = solve_equilibrium(
+                &p,
+                &StaticOptions {
+                    tolerance: 1e-13,
+                    ..Default::default()
+                },
+            )
+            .unwrap();
             let scale = exact.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
             let err = mesh.node_sets["interior"]
                 .iter()
@@ -112,14 +152,22 @@ fn patch_test_static() {
                 .map(|(n, k)| (res.u[n][k] - exact[n][k]).abs())
                 .fold(0.0f64, f64::max)
                 / scale;
-            println!("patch_test_static seed {seed} {variant:?}: interior error {err:.2e} of max |u|");
+            println!(
+                "patch_test_static seed {seed} {variant:?}: interior error {err:.2e} of max |u|"
+            );
             match variant {
                 // Newton converged to 1e-13 of the reaction scale; the interior solution is the
                 // homogeneous one to the conditioning of the tangent times that: 1e-10
-                GradientVariant::MeanGradient => assert!(err < 1e-10, "seed {seed}: mean-gradient patch error {err:e}"),
+                GradientVariant::MeanGradient => assert!(
+                    err < 1e-10,
+                    "seed {seed}: mean-gradient patch error {err:e}"
+                ),
                 // the centroid element's spurious interior forces move the interior nodes: the error is
                 // of the order of the force residual (~1e-2 relative); 1e-5 is far above round-off
-                GradientVariant::Centroid => assert!(err > 1e-5, "seed {seed}: centroid patch error {err:e} unexpectedly small"),
+                GradientVariant::Centroid => assert!(
+                    err > 1e-5,
+                    "seed {seed}: centroid patch error {err:e} unexpectedly small"
+                ),
             }
         }
     }

@@ -251,7 +251,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
             let cells = m
                 .cells
                 .ok_or_else(|| Error::field(f, "mesh.cells", "required by this generator"))?;
-            if cells.iter().any(|&c| c == 0) {
+            if cells.contains(&0) {
                 return Err(Error::field(
                     f,
                     "mesh.cells",
