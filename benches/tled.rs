@@ -131,13 +131,14 @@ fn block_problem(c: usize) -> Problem {
             niftysim_timing: false,
         },
         additive_constraints: false,
+        physics: Default::default(),
     };
-    // dt = 1e-4 s is stable up to 64k hexahedra (h = 1 mm); finer blocks get half the
-    // smallest per-element estimate L_e / c_e so that long `step` benches cannot diverge.
+    // dt = 1e-4 s is stable up to 80^3 (critical 2/omega_max = 1.41e-4 s there, 0.95 of
+    // the smallest L_e / c_e); finer blocks get 0.8 L_e / c_e so `step` cannot diverge.
     let est = element_estimates(&p)
         .into_iter()
         .fold(f64::INFINITY, f64::min);
-    p.time.dt = DT.min(0.5 * est);
+    p.time.dt = DT.min(0.8 * est);
     if std::env::var_os("STICKY_LIPS_BENCH_STABILITY").is_some() {
         let d = sticky_lips::tled::precompute::Discretisation::new(&p);
         let r = sticky_lips::tled::stability::analyse(&p, &d);

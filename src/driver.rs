@@ -2,7 +2,7 @@
 //! progress, summary. Used by the CLI (`sticky-lips run`, `equilibrium`) and by tests.
 
 use crate::error::Result;
-use crate::io::output::FrameWriter;
+use crate::io::output::{FrameWriter, SalivaFrame};
 use crate::problem::Problem;
 use crate::real::{Precision, Real};
 use crate::static_solve::{solve_equilibrium, StaticOptions};
@@ -61,6 +61,9 @@ pub struct RunSummary {
     pub stability: Option<StabilityReport>,
     pub frames: usize,
     pub energy: EnergySeries,
+    /// Number of saliva elements, and how many are broken at each frame (same times as `energy`).
+    pub saliva_elements: usize,
+    pub broken_saliva: Vec<usize>,
     pub newton_iterations: Option<usize>,
     pub residual_norm: Option<f64>,
 }
@@ -92,12 +95,25 @@ fn run_typed<T: Real>(problem: &Problem, opts: &RunOptions) -> Result<RunSummary
         &problem.element_material,
     )?;
     let mut energy = EnergySeries::default();
+    let mut broken = Vec::new();
+    let has_saliva = !sim.disc.saliva.elements.is_empty();
     let mut record = |sim: &Simulation<T>, writer: &mut FrameWriter| -> Result<()> {
         let e = sim.energies();
         energy.time.push(sim.time());
         energy.kinetic.push(e.kinetic);
         energy.strain.push(e.strain);
-        writer.frame(sim.time(), &sim.displacement_f64(), &sim.disc)
+        let saliva = has_saliva.then(|| {
+            let s = sim.saliva();
+            broken.push(s.broken_count());
+            SalivaFrame {
+                moisture: s.moisture.clone(),
+                z: s.z.clone(),
+                q: s.q.clone(),
+                broken: s.broken.clone(),
+                broken_at: s.broken_at.clone(),
+            }
+        });
+        writer.frame(sim.time(), &sim.displacement_f64(), &sim.disc, saliva)
     };
     record(&sim, &mut writer)?;
     let n = sim.num_steps();
@@ -142,6 +158,8 @@ fn run_typed<T: Real>(problem: &Problem, opts: &RunOptions) -> Result<RunSummary
         critical_time_step: report.critical_time_step,
         stability: Some(report),
         frames: writer.frames_written(),
+        saliva_elements: sim.disc.saliva.elements.len(),
+        broken_saliva: broken,
         energy,
         newton_iterations: None,
         residual_norm: None,
@@ -178,7 +196,7 @@ pub fn equilibrium(
             &problem.mesh.elements,
             &problem.element_material,
         )?;
-        writer.frame(problem.time.total_time, &res.u, &disc)?;
+        writer.frame(problem.time.total_time, &res.u, &disc, None)?;
         let strain = crate::tled::solver::strain_energy(&disc, &res.u);
         let summary = RunSummary {
             input: problem.source.clone(),
@@ -203,6 +221,8 @@ pub fn equilibrium(
                 kinetic: vec![0.0],
                 strain: vec![strain],
             },
+            saliva_elements: 0,
+            broken_saliva: Vec::new(),
             newton_iterations: Some(res.newton_iterations),
             residual_norm: Some(res.residual_norm),
         };

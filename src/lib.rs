@@ -13,6 +13,7 @@
 // rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod blend;
 pub mod driver;
 pub mod element;
 pub mod error;
@@ -20,6 +21,7 @@ pub mod io;
 pub mod linalg;
 pub mod material;
 pub mod mesh;
+pub mod muscle;
 pub mod problem;
 pub mod real;
 pub mod static_solve;

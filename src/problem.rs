@@ -4,8 +4,10 @@
 
 use crate::element::hex8::GradientVariant;
 use crate::error::{Error, Location, Result};
+use crate::material::saliva::SalivaParams;
 use crate::material::NeoHookean;
 use crate::mesh::Mesh;
+use crate::muscle::Muscle;
 use crate::tled::boundary::BoundaryConditions;
 
 /// A material assigned to a set of elements.
@@ -52,6 +54,20 @@ impl Default for Numerics {
     }
 }
 
+/// A saliva material: every element of material `material` is a breaking saliva element.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SalivaSet {
+    pub material: u32,
+    pub params: SalivaParams,
+}
+
+/// The sticky-lips physics on top of TLED (paper sections 3.3-3.4).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Physics {
+    pub saliva: Vec<SalivaSet>,
+    pub muscles: Vec<Muscle>,
+}
+
 #[derive(Clone, Debug)]
 pub struct Problem {
     /// The input file, for messages.
@@ -66,6 +82,8 @@ pub struct Problem {
     /// Constraint semantics: `true` = NiftySim's (Disp overrides Fix, duplicate Disp values on
     /// one DOF add up); `false` = any DOF constrained twice is an error.
     pub additive_constraints: bool,
+    /// Saliva elements and muscles.
+    pub physics: Physics,
 }
 
 impl Problem {
@@ -200,6 +218,114 @@ impl Problem {
                     "duration",
                     format!("load curve duration must be positive, got {}", c.duration),
                 ));
+            }
+        }
+        for (i, g) in self.bc.gravity.iter().enumerate() {
+            if let Some(nodes) = &g.nodes {
+                check_nodes(&format!("gravity[{i}].nodes"), nodes)?;
+            }
+        }
+        for (i, s) in self.physics.saliva.iter().enumerate() {
+            let field = |k: &str| format!("saliva[{i}].{k}");
+            if s.material as usize >= self.materials.len() {
+                return Err(Error::field(f, field("material"), "no such material"));
+            }
+            let sp = &s.params;
+            if !pos(sp.critical_moisture) {
+                return Err(Error::field(
+                    f,
+                    field("critical_moisture"),
+                    format!("must be positive, got {}", sp.critical_moisture),
+                ));
+            }
+            if !(sp.k_glue.is_finite() && sp.k_glue >= 0.0) {
+                return Err(Error::field(
+                    f,
+                    field("k_glue"),
+                    format!("must be >= 0, got {}", sp.k_glue),
+                ));
+            }
+            let ev = &sp.evaporation;
+            if ev.starts.is_empty()
+                || ev.starts.len() != ev.rates.len()
+                || ev.starts[0] != 0.0
+                || ev.starts.windows(2).any(|w| !(w[1] > w[0]))
+            {
+                return Err(Error::field(
+                    f,
+                    field("evaporation"),
+                    "needs increasing start times beginning at 0, one rate each",
+                ));
+            }
+            if ev.rates.iter().any(|r| !(r.is_finite() && *r >= 0.0)) {
+                return Err(Error::field(
+                    f,
+                    field("evaporation"),
+                    "rates must be finite and >= 0",
+                ));
+            }
+            match sp.decay {
+                crate::material::saliva::Decay::PerStep(d) if !(d > 0.0 && d <= 1.0) => {
+                    return Err(Error::field(
+                        f,
+                        field("decay_per_step"),
+                        format!("must be in (0, 1], got {d}"),
+                    ));
+                }
+                crate::material::saliva::Decay::Time(t) if !pos(t) => {
+                    return Err(Error::field(
+                        f,
+                        field("decay_time"),
+                        format!("must be positive, got {t}"),
+                    ));
+                }
+                _ => {}
+            }
+        }
+        for (i, m) in self.physics.muscles.iter().enumerate() {
+            let field = |k: &str| format!("muscle[{i}] ({}).{k}", m.name);
+            if !pos(m.radius) {
+                return Err(Error::field(
+                    f,
+                    field("radius"),
+                    format!("must be positive, got {}", m.radius),
+                ));
+            }
+            if !(m.strength.is_finite() && m.strength >= 0.0) {
+                return Err(Error::field(
+                    f,
+                    field("strength"),
+                    format!("must be >= 0, got {}", m.strength),
+                ));
+            }
+            if !(0.0..=1.0).contains(&m.activation) {
+                return Err(Error::field(
+                    f,
+                    field("activation"),
+                    format!("must be in [0, 1], got {}", m.activation),
+                ));
+            }
+            if crate::linalg::norm(&[
+                m.origin[0] - m.insertion[0],
+                m.origin[1] - m.insertion[1],
+                m.origin[2] - m.insertion[2],
+            ]) == 0.0
+            {
+                return Err(Error::field(
+                    f,
+                    field("insertion"),
+                    "origin and insertion coincide",
+                ));
+            }
+            if m.select_nodes(&self.mesh.nodes).is_empty() {
+                return Err(Error::field(
+                    f,
+                    field("radius"),
+                    "the muscle's cylinder contains no node",
+                ));
+            }
+            if !pos(m.curve.duration) {
+                return Err(Error::field(f, field("duration"), "must be positive"));
             }
         }
         if !self.additive_constraints {

@@ -605,6 +605,7 @@ mod tests {
                 ..Numerics::default()
             },
             additive_constraints: false,
+            physics: Default::default(),
         }
     }
 

@@ -2,7 +2,7 @@
 //! forces are the gradient of the stored energy, the hourglass part vanishes on linear
 //! fields, rigid motions give no force, `S = 2 dPsi/dC` and the tangent is `dS/dE`.
 //! Also holds the small problem builders shared by the other verification modules.
-#![allow(dead_code)]
+#![allow(dead_code, clippy::needless_range_loop)] // index loops mirror the tensor notation
 
 use sticky_lips::element::hex8::GradientVariant;
 use sticky_lips::material::neo_hookean::{material_tangent, pk2_stress, strain_energy_density};
@@ -49,6 +49,7 @@ pub fn problem(
             niftysim_timing: false,
         },
         additive_constraints: false,
+        physics: Default::default(),
     }
 }
 

@@ -286,16 +286,13 @@ fn unstable_time_step_is_refused_and_a_forced_run_stops_cleanly() {
         force_dt: false,
         progress: Progress::Quiet,
     };
-    let e = run(&s.problem, &opts)
-        .err()
-        .expect("must refuse")
-        .to_string();
+    let e = run(&s.problem, &opts).expect_err("must refuse").to_string();
     assert!(
         e.contains("exceeds the critical time step") && e.contains("limiting element is"),
         "{e}"
     );
     opts.force_dt = true;
-    let e = run(&s.problem, &opts).err().expect("must diverge");
+    let e = run(&s.problem, &opts).expect_err("must diverge");
     match &e {
         sticky_lips::Error::Diverged {
             step,

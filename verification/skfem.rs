@@ -3,6 +3,7 @@
 //! on distorted trilinear hexahedra with 2x2x2 Gauss quadrature. For a homogeneous deformation the
 //! fully integrated element force equals `V P(F0)` times the mean gradient, which is exactly the
 //! mean-gradient one-point element (paper eq. 4 with `D_a = (1/V) int dN_a/dX`).
+#![allow(clippy::needless_range_loop)] // index loops mirror the tensor notation
 
 use crate::element::{bare_problem, force_of, problem};
 use crate::patch::internal_forces;

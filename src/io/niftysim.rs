@@ -512,6 +512,7 @@ pub fn parse(
             niftysim_timing,
         },
         additive_constraints: true,
+        physics: Default::default(),
     };
     Ok(problem)
 }

@@ -4,7 +4,9 @@
 //!
 //! Point positions in the VTU files are the deformed configuration `X + u` (ParaView
 //! animates the `.pvd` directly); point data `displacement` is `u` in metres; cell data
-//! `material` is the material index and `volume_ratio` is `J = det F`. Node and element
+//! `material` is the material index and `volume_ratio` is `J = det F`; with saliva elements,
+//! also `saliva_moisture` (um), `saliva_Z`, `saliva_Q`, `saliva_broken` (1/0, -1 for tissue)
+//! and `saliva_broken_at` (s; NaN for never and for tissue elements). Node and element
 //! numbering is the input's.
 
 use crate::error::{Error, Result};
@@ -21,7 +23,17 @@ pub struct FrameWriter {
     elements: Vec<[u32; 8]>,
     material: Vec<i32>,
     entries: Vec<PvdEntry>,
-    last: Option<(f64, Vec<[f64; 3]>)>,
+    last: Option<(f64, Vec<[f64; 3]>, Option<SalivaFrame>)>,
+}
+
+/// The saliva elements' state at a frame, in saliva-element order (see `SalivaPlan`).
+#[derive(Clone, Debug)]
+pub struct SalivaFrame {
+    pub moisture: Vec<f64>,
+    pub z: Vec<f64>,
+    pub q: Vec<f64>,
+    pub broken: Vec<bool>,
+    pub broken_at: Vec<f64>,
 }
 
 impl FrameWriter {
@@ -67,6 +79,7 @@ impl FrameWriter {
         time: f64,
         u: &[[f64; 3]],
         disc: &Discretisation,
+        saliva: Option<&SalivaFrame>,
     ) -> Result<()> {
         let points: Vec<[f64; 3]> = self
             .reference
@@ -80,6 +93,56 @@ impl FrameWriter {
                 1.0 + crate::linalg::det_identity_plus_minus_one(&displacement_gradient(disc, u, e))
             })
             .collect();
+        let ne = disc.num_elements();
+        let spread = |v: &[f64]| {
+            let mut out = vec![f64::NAN; ne];
+            for (k, &e) in disc.saliva.elements.iter().enumerate() {
+                out[e as usize] = v[k];
+            }
+            out
+        };
+        let (moisture, z, q, broken_at, broken) = match saliva {
+            Some(s) => {
+                let mut b = vec![-1i32; ne];
+                for (k, &e) in disc.saliva.elements.iter().enumerate() {
+                    b[e as usize] = s.broken[k] as i32;
+                }
+                (
+                    spread(&s.moisture),
+                    spread(&s.z),
+                    spread(&s.q),
+                    spread(&s.broken_at),
+                    b,
+                )
+            }
+            None => Default::default(),
+        };
+        let f64_cell = |name, data| DataArray::F64 {
+            name,
+            components: 1,
+            data,
+        };
+        let mut cell_data = vec![
+            DataArray::I32 {
+                name: "material",
+                components: 1,
+                data: &self.material,
+            },
+            f64_cell("volume_ratio", &j),
+        ];
+        if saliva.is_some() {
+            cell_data.extend([
+                f64_cell("saliva_moisture", &moisture),
+                f64_cell("saliva_Z", &z),
+                f64_cell("saliva_Q", &q),
+                DataArray::I32 {
+                    name: "saliva_broken",
+                    components: 1,
+                    data: &broken,
+                },
+                f64_cell("saliva_broken_at", &broken_at),
+            ]);
+        }
         let frame = VtuFrame {
             points: &points,
             hexahedra: &self.elements,
@@ -88,38 +151,33 @@ impl FrameWriter {
                 components: 3,
                 data: &disp,
             }],
-            cell_data: vec![
-                DataArray::I32 {
-                    name: "material",
-                    components: 1,
-                    data: &self.material,
-                },
-                DataArray::F64 {
-                    name: "volume_ratio",
-                    components: 1,
-                    data: &j,
-                },
-            ],
+            cell_data,
             time: Some(time),
         };
         write_vtu(path, &frame).map_err(|e| Error::io(path, e))
     }
 
     /// Writes `frame_NNNNNN.vtu` for displacement `u` at `time`, then the updated `.pvd`.
-    pub fn frame(&mut self, time: f64, u: &[[f64; 3]], disc: &Discretisation) -> Result<()> {
+    pub fn frame(
+        &mut self,
+        time: f64,
+        u: &[[f64; 3]],
+        disc: &Discretisation,
+        saliva: Option<SalivaFrame>,
+    ) -> Result<()> {
         let name = format!("frame_{:06}.vtu", self.entries.len());
-        self.write_file(&self.dir.join(&name), time, u, disc)?;
+        self.write_file(&self.dir.join(&name), time, u, disc, saliva.as_ref())?;
         self.entries.push(PvdEntry { time, file: name });
         let pvd = self.dir.join("frames.pvd");
         write_pvd(&pvd, &self.entries).map_err(|e| Error::io(&pvd, e))?;
-        self.last = Some((time, u.to_vec()));
+        self.last = Some((time, u.to_vec(), saliva));
         Ok(())
     }
 
     /// Writes `final.vtu` (the last frame) and `summary.json`.
     pub fn finish<S: serde::Serialize>(&self, disc: &Discretisation, summary: &S) -> Result<()> {
-        if let Some((t, u)) = &self.last {
-            self.write_file(&self.dir.join("final.vtu"), *t, u, disc)?;
+        if let Some((t, u, s)) = &self.last {
+            self.write_file(&self.dir.join("final.vtu"), *t, u, disc, s.as_ref())?;
         }
         let path = self.dir.join("summary.json");
         let json = serde_json::to_vec_pretty(summary).expect("summary serialises");

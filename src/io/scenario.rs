@@ -537,6 +537,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
             niftysim_timing: false,
         },
         additive_constraints: false,
+        physics: Default::default(),
     };
     problem.validate()?;
     Ok(Scenario {

@@ -65,11 +65,12 @@ pub struct LoadCurve {
 
 impl LoadCurve {
     /// Value at time `t` (s). With `clamp`, `tau` is held in `[0, 1]` (the shape holds its
-    /// end value, and is zero before `start`); without, it is NiftySim's unclamped value.
+    /// end value, and is zero before `start`; at `start` it is the shape's value at 0, so a
+    /// `Step` is on from `start`); without, it is NiftySim's unclamped value.
     pub fn value(&self, t: f64, clamp: bool) -> f64 {
         let mut tau = (t - self.start) / self.duration;
         if clamp {
-            if tau <= 0.0 {
+            if tau < 0.0 {
                 return 0.0;
             }
             tau = tau.min(1.0);

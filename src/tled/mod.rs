@@ -4,6 +4,7 @@ pub mod boundary;
 pub mod element_forces;
 pub mod node_update;
 pub mod precompute;
+pub mod saliva_forces;
 pub mod solver;
 pub mod stability;
 

@@ -3,6 +3,7 @@
 //! the node gather lists, and the constraint and load plans.
 
 use crate::element::hex8;
+use crate::material::saliva::{self, SalivaParams};
 use crate::mesh::NodeGather;
 use crate::problem::Problem;
 use crate::tled::boundary::{LoadCurve, PrescribedRotation};
@@ -26,6 +27,20 @@ pub struct ConstraintPlan {
 pub struct LoadGroup {
     pub curve: LoadCurve,
     pub entries: Vec<(u32, f64)>,
+}
+
+/// Per-saliva-element constants (paper section 3.4), in saliva-element order.
+#[derive(Clone, Debug, Default)]
+pub struct SalivaPlan {
+    /// Element index of each saliva element (increasing).
+    pub elements: Vec<u32>,
+    /// Unit local y axis (across the layer) in the reference configuration.
+    pub across: Vec<[f64; 3]>,
+    /// Initial moisture `0M` (um).
+    pub initial_moisture: Vec<f64>,
+    /// Index into `groups` (the saliva set the element belongs to).
+    pub group: Vec<u32>,
+    pub groups: Vec<SalivaParams>,
 }
 
 /// The discretised model in `f64`: the single source of every derived constant that the
@@ -52,6 +67,9 @@ pub struct Discretisation {
     pub gather: NodeGather,
     pub constraints: ConstraintPlan,
     pub loads: Vec<LoadGroup>,
+    pub saliva: SalivaPlan,
+    /// Nodes driven by each muscle (same order as `Problem::physics.muscles`).
+    pub muscle_nodes: Vec<Vec<u32>>,
 }
 
 impl Discretisation {
@@ -75,6 +93,8 @@ impl Discretisation {
             gather: NodeGather::new(nn, &mesh.elements),
             constraints: ConstraintPlan::default(),
             loads: Vec::new(),
+            saliva: SalivaPlan::default(),
+            muscle_nodes: Vec::new(),
         };
         for e in 0..ne {
             let x = mesh.element_coords(e);
@@ -107,12 +127,64 @@ impl Discretisation {
         }
         d.constraints = plan_constraints(p);
         d.loads = plan_loads(p, &d.mass);
+        for m in &p.physics.muscles {
+            let nodes = m.select_nodes(&mesh.nodes);
+            let f = m.nodal_force(nodes.len());
+            let entries = nodes
+                .iter()
+                .flat_map(|&n| {
+                    (0..3)
+                        .filter(|&k| f[k] != 0.0)
+                        .map(move |k| (3 * n + k as u32, f[k]))
+                })
+                .collect();
+            d.loads.push(LoadGroup {
+                curve: m.curve,
+                entries,
+            });
+            d.muscle_nodes.push(nodes);
+        }
+        d.saliva = plan_saliva(p);
         d
     }
 
     pub fn num_elements(&self) -> usize {
         self.conn.len()
     }
+}
+
+fn plan_saliva(p: &Problem) -> SalivaPlan {
+    let mut plan = SalivaPlan {
+        groups: p.physics.saliva.iter().map(|s| s.params.clone()).collect(),
+        ..Default::default()
+    };
+    for (e, &m) in p.element_material.iter().enumerate() {
+        let Some(g) = p.physics.saliva.iter().position(|s| s.material == m) else {
+            continue;
+        };
+        let params = &p.physics.saliva[g].params;
+        let x = p.mesh.element_coords(e);
+        let across = match params.across {
+            Some(a) => {
+                let n = crate::linalg::norm(&a);
+                [a[0] / n, a[1] / n, a[2] / n]
+            }
+            None => saliva::across_direction(&x),
+        };
+        let mut c = [0.0; 3];
+        for xa in &x {
+            for k in 0..3 {
+                c[k] += xa[k] / 8.0;
+            }
+        }
+        let k = plan.elements.len();
+        plan.elements.push(e as u32);
+        plan.across.push(across);
+        plan.initial_moisture
+            .push(params.initial_moisture.value(&c, k));
+        plan.group.push(g as u32);
+    }
+    plan
 }
 
 fn plan_constraints(p: &Problem) -> ConstraintPlan {

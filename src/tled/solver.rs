@@ -2,10 +2,11 @@
 //!
 //! One step (iteration `s`, from `t_s = s dt` to `t_{s+1}`):
 //! 1. `element_forces`: `F_int` blocks from `u_s`, stop if an element inverted;
-//! 2. external forces `R_s` at `t_s`;
-//! 3. `node_update`: central differences for every DOF;
-//! 4. `apply_constraints`: fixed, prescribed and rotated DOFs set at `t_{s+1}`;
-//! 5. buffers rotate.
+//! 2. `saliva_forces`: the breaking rule (eq. 11) on every saliva element's block;
+//! 3. external forces `R_s` at `t_s` (loads, gravity, muscles);
+//! 4. `node_update`: central differences for every DOF;
+//! 5. `apply_constraints`: fixed, prescribed and rotated DOFs set at `t_{s+1}`;
+//! 6. buffers rotate.
 
 use crate::error::{Error, Result};
 use crate::problem::Problem;
@@ -13,6 +14,7 @@ use crate::real::Real;
 use crate::tled::element_forces::{element_forces, ElementArrays};
 use crate::tled::node_update::{gather_all, node_update, CentralDifference};
 use crate::tled::precompute::Discretisation;
+use crate::tled::saliva_forces::{saliva_forces, SalivaState};
 
 /// Energies of a state (J).
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
@@ -31,6 +33,7 @@ pub struct Simulation<T: Real> {
     u_next: Vec<[T; 3]>,
     elem_f: Vec<[[T; 3]; 8]>,
     r_ext: Vec<[T; 3]>,
+    saliva: SalivaState<T>,
     step: usize,
     num_steps: usize,
     dt: f64,
@@ -56,6 +59,7 @@ impl<T: Real> Simulation<T> {
             u_next: vec![[T::ZERO; 3]; nn],
             elem_f: vec![[[T::ZERO; 3]; 8]; ne],
             r_ext: vec![[T::ZERO; 3]; nn],
+            saliva: SalivaState::new(&disc.saliva, problem.time.dt),
             step: 0,
             num_steps: problem.num_steps(),
             dt: problem.time.dt,
@@ -120,6 +124,16 @@ impl<T: Real> Simulation<T> {
                 reason: "element inverted or degenerate (det F <= 0 or not finite)".into(),
             });
         }
+        if !self.disc.saliva.elements.is_empty() {
+            saliva_forces(
+                &self.disc.saliva,
+                &mut self.saliva,
+                &self.el,
+                &self.u,
+                &mut self.elem_f,
+                t,
+            );
+        }
         let has_loads = !self.disc.loads.is_empty();
         if has_loads {
             self.assemble_external(s);
@@ -174,9 +188,20 @@ impl<T: Real> Simulation<T> {
         }
     }
 
+    /// The saliva elements' state after the last step.
+    pub fn saliva(&self) -> &SalivaState<T> {
+        &self.saliva
+    }
+
     /// Internal nodal forces at the current state (N), reactions at constrained DOFs included.
+    /// Saliva elements contribute the force of the last step's breaking rule.
     pub fn internal_forces(&mut self) -> Vec<[f64; 3]> {
         element_forces(&self.el, &self.u, &mut self.elem_f);
+        for (k, &e) in self.disc.saliva.elements.iter().enumerate() {
+            if self.saliva.broken[k] {
+                self.elem_f[e as usize] = self.saliva.previous[k];
+            }
+        }
         gather_all(&self.disc.gather, &self.elem_f, self.disc.num_nodes)
             .into_iter()
             .map(|f| f.map(T::to_f64))
