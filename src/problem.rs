@@ -231,6 +231,30 @@ impl Problem {
                 return Err(Error::field(f, field("material"), "no such material"));
             }
             let sp = &s.params;
+            if let crate::material::saliva::MoistureMap::PerElement(v) = &sp.initial_moisture {
+                let n = self
+                    .element_material
+                    .iter()
+                    .filter(|&&m| m == s.material)
+                    .count();
+                if v.len() != n {
+                    return Err(Error::field(
+                        f,
+                        field("initial_moisture"),
+                        format!(
+                            "the moisture file has {} values for {n} saliva elements",
+                            v.len()
+                        ),
+                    ));
+                }
+            }
+            if let Some(v) = sp.initial_moisture_values_invalid() {
+                return Err(Error::field(
+                    f,
+                    field("initial_moisture"),
+                    format!("moisture must be finite and >= 0, got {v}"),
+                ));
+            }
             if !pos(sp.critical_moisture) {
                 return Err(Error::field(
                     f,

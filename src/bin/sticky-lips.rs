@@ -82,6 +82,48 @@ enum Command {
         #[command(flatten)]
         input: InputArgs,
     },
+    /// Evaporation rate of the saliva film from physical inputs (paper eq. 5, Herz-Knudsen).
+    Evaporation {
+        /// Sticking (evaporation) coefficient alpha, dimensionless.
+        #[arg(long, default_value_t = 1.0)]
+        sticking: f64,
+        /// Liquid (lip surface) temperature in degrees Celsius.
+        #[arg(long, default_value_t = 34.0)]
+        temperature: f64,
+        /// Liquid pressure p_liq (Pa); default: water's saturation vapour pressure at --temperature.
+        #[arg(long)]
+        p_liq: Option<f64>,
+        /// Equilibrium pressure p_eq (Pa); default: --humidity x saturation pressure at --ambient.
+        #[arg(long)]
+        p_eq: Option<f64>,
+        /// Relative humidity of the air (0..1), used when --p-eq is not given.
+        #[arg(long, default_value_t = 0.5)]
+        humidity: f64,
+        /// Air temperature in degrees Celsius, used when --p-eq is not given.
+        #[arg(long, default_value_t = 22.0)]
+        ambient: f64,
+        /// Molar mass of the evaporating species (kg/mol); water by default.
+        #[arg(long, default_value_t = 0.018015)]
+        molar_mass: f64,
+        /// Density of the liquid film (kg/m^3).
+        #[arg(long, default_value_t = 1000.0)]
+        density: f64,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Blend shapes (paper eq. 1): x' = X + sum_i w_i B_i, written as an output frame.
+    Blend {
+        /// The model the shapes belong to (its reference positions X and mesh).
+        #[command(flatten)]
+        input: InputArgs,
+        /// A shape and its weight: PATH.vtu=WEIGHT (PATH's point data `displacement` is B_i),
+        /// e.g. out/open/final.vtu=0.3. Repeat for several shapes.
+        #[arg(long = "shape", required = true)]
+        shapes: Vec<String>,
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 fn load(args: &InputArgs) -> sticky_lips::Result<(Problem, Option<PathBuf>)> {
@@ -216,6 +258,30 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                 out.display()
             );
         }
+        Command::Evaporation {
+            sticking,
+            temperature,
+            p_liq,
+            p_eq,
+            humidity,
+            ambient,
+            molar_mass,
+            density,
+            json,
+        } => {
+            evaporation(
+                sticking,
+                temperature,
+                p_liq,
+                p_eq,
+                humidity,
+                ambient,
+                molar_mass,
+                density,
+                json,
+            )?;
+        }
+        Command::Blend { input, shapes, out } => blend(&input, &shapes, &out)?,
         Command::Check { input } => {
             let (p, _) = load(&input)?;
             let st = p.mesh.stats();
@@ -262,5 +328,127 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             }
         }
     }
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn evaporation(
+    sticking: f64,
+    temperature: f64,
+    p_liq: Option<f64>,
+    p_eq: Option<f64>,
+    humidity: f64,
+    ambient: f64,
+    molar_mass: f64,
+    density: f64,
+    json: bool,
+) -> sticky_lips::Result<()> {
+    use sticky_lips::material::saliva::{evaporation_rates, water_saturation_pressure};
+    let p_liq = p_liq.unwrap_or_else(|| water_saturation_pressure(temperature));
+    let p_eq = p_eq.unwrap_or_else(|| humidity * water_saturation_pressure(ambient));
+    let t_k = temperature + 273.15;
+    let r = evaporation_rates(sticking, p_liq, p_eq, molar_mass, t_k, density);
+    if json {
+        let v = serde_json::json!({
+            "inputs": {"sticking": sticking, "temperature_K": t_k, "p_liq_Pa": p_liq, "p_eq_Pa": p_eq,
+                       "molar_mass_kg_per_mol": molar_mass, "density_kg_per_m3": density},
+            "molecular_flux_per_m2_s": r.molecular_flux,
+            "mass_flux_kg_per_m2_s": r.mass_flux,
+            "thinning_rate_m_per_s": r.thinning_rate,
+            "moisture_rate_um_per_s": r.moisture_rate,
+        });
+        println!("{}", serde_json::to_string_pretty(&v).expect("json"));
+    } else {
+        println!("Herz-Knudsen evaporation (paper eq. 5)");
+        println!("  sticking coefficient alpha   {sticking}");
+        println!("  liquid temperature T_liq     {t_k:.2} K ({temperature} C)");
+        println!(
+            "  p_liq - p_eq                 {p_liq:.2} Pa - {p_eq:.2} Pa = {:.2} Pa",
+            p_liq - p_eq
+        );
+        println!(
+            "  molecule mass m              {:.4e} kg",
+            molar_mass / sticky_lips::material::saliva::AVOGADRO
+        );
+        println!(
+            "  molecular flux phi           {:.4e} molecules / (m^2 s)",
+            r.molecular_flux
+        );
+        println!(
+            "  mass flux                    {:.4e} kg / (m^2 s)",
+            r.mass_flux
+        );
+        println!("  film thinning rate           {:.4e} m/s", r.thinning_rate);
+        println!(
+            "  model evaporation rate       {:.4e} um/s (moisture units per second)",
+            r.moisture_rate
+        );
+        if r.moisture_rate > 0.0 {
+            println!(
+                "  a 100 um film dries in       {:.4e} s",
+                100.0 / r.moisture_rate
+            );
+        }
+    }
+    Ok(())
+}
+
+fn blend(input: &InputArgs, shapes: &[String], out: &Path) -> sticky_lips::Result<()> {
+    use sticky_lips::error::{Error, Location};
+    let (p, _) = load(input)?;
+    let nn = p.mesh.nodes.len();
+    let mut fields = Vec::new();
+    for spec in shapes {
+        let (path, w) = spec.rsplit_once('=').ok_or_else(|| {
+            Error::input(
+                "--shape",
+                Location::None,
+                format!("`{spec}`: expected PATH.vtu=WEIGHT"),
+            )
+        })?;
+        let w: f64 = w.parse().map_err(|_| {
+            Error::input("--shape", Location::None, format!("`{w}` is not a weight"))
+        })?;
+        let (v, comps, points) =
+            sticky_lips::io::vtu::read_point_data_f64(Path::new(path), "displacement")?;
+        if comps != 3 || points != nn {
+            return Err(Error::input(
+                path,
+                Location::None,
+                format!(
+                    "shape has {points} points x {comps} components; the model has {nn} nodes x 3"
+                ),
+            ));
+        }
+        let b: Vec<[f64; 3]> = v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        fields.push((w, b));
+    }
+    let refs: Vec<(f64, &[[f64; 3]])> = fields.iter().map(|(w, b)| (*w, b.as_slice())).collect();
+    let x = sticky_lips::blend::blend(&p.mesh.nodes, &refs);
+    let u: Vec<[f64; 3]> = x
+        .iter()
+        .zip(&p.mesh.nodes)
+        .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
+        .collect();
+    let disc = Discretisation::new(&p);
+    let mut w = sticky_lips::io::output::FrameWriter::new(
+        out,
+        &p.mesh.nodes,
+        &p.mesh.elements,
+        &p.element_material,
+    )?;
+    w.frame(0.0, &u, &disc, None)?;
+    let summary = serde_json::json!({
+        "input": p.source, "kind": "blend", "shapes": shapes, "steps": 0, "simulated_time": 0.0,
+        "wall_time": 0.0, "element_updates_per_second": 0.0, "precision": "f64", "threads": 1,
+        "critical_time_step": null, "frames": 1,
+        "energy": {"time": [0.0], "kinetic": [0.0], "strain": [sticky_lips::tled::solver::strain_energy(&disc, &u)]},
+    });
+    w.finish(&disc, &summary)?;
+    println!(
+        "blend of {} shape(s) written to {}",
+        shapes.len(),
+        out.display()
+    );
     Ok(())
 }

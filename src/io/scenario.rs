@@ -9,7 +9,8 @@ use crate::element::hex8::GradientVariant;
 use crate::error::{Error, Location, Result};
 use crate::material::NeoHookean;
 use crate::mesh::{generate, Mesh};
-use crate::problem::{MaterialSpec, Numerics, Problem, TimeSettings};
+use crate::muscle::Muscle;
+use crate::problem::{MaterialSpec, Numerics, Physics, Problem, SalivaSet, TimeSettings};
 use crate::tled::boundary::{
     BoundaryConditions, Fixed, Gravity, LoadCurve, LoadShape, NodalForce, PrescribedDisplacement,
     PrescribedRotation,
@@ -36,6 +37,10 @@ pub struct ScenarioFile {
     #[serde(default)]
     pub force: Vec<ForceDef>,
     pub gravity: Option<GravityDef>,
+    #[serde(default)]
+    pub saliva: Vec<SalivaDef>,
+    #[serde(default)]
+    pub muscle: Vec<MuscleDef>,
     pub time: TimeDef,
     #[serde(default)]
     pub numerics: NumericsDef,
@@ -167,6 +172,91 @@ pub struct ForceDef {
 pub struct GravityDef {
     /// Acceleration vector (m/s^2).
     pub acceleration: [f64; 3],
+    #[serde(flatten)]
+    pub curve: CurveDef,
+}
+
+/// A saliva material (paper section 3.4). Moisture is in micrometres of film.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct SalivaDef {
+    /// Name of the material (in `[[materials]]`) whose elements are saliva.
+    pub material: String,
+    /// Critical moisture `M_c` (um).
+    pub critical_moisture: f64,
+    /// Maximum glue strength `K` of eq. (7).
+    pub k_glue: f64,
+    /// Initial moisture `0M` (um): a number, or a map (see `MoistureDef`).
+    pub initial_moisture: MoistureDef,
+    /// Constant evaporation rate `phi` (um/s); default 0 (Table 1).
+    pub evaporation_rate: Option<f64>,
+    /// Piecewise-constant evaporation: `{ starts = [0.0, ...], rates = [...] }` (s, um/s).
+    pub evaporation: Option<EvaporationDef>,
+    /// `"literal"` (default) or `"latched"`.
+    pub rule: Option<crate::material::saliva::BreakingRule>,
+    /// Force factor per step once broken (default 0.99, the paper's).
+    pub decay_per_step: Option<f64>,
+    /// Alternatively a dt-independent decay time (s).
+    pub decay_time: Option<f64>,
+    /// Local y axis (across the layer) for all elements; default: each element's thin direction.
+    pub across: Option<[f64; 3]>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct EvaporationDef {
+    pub starts: Vec<f64>,
+    pub rates: Vec<f64>,
+}
+
+/// Initial moisture: `90.0`, or one of the tables
+/// `{ gradient = { axis = [1,0,0], from = [x0, m0], to = [x1, m1] } }`,
+/// `{ bands = { axis = [1,0,0], edges = [x1, x2], values = [m0, m1, m2] } }`,
+/// `{ left_right = { axis = [1,0,0], center = 0.0, left = m_l, right = m_r } }`,
+/// `{ file = "moisture.csv" }` (one value per saliva element, in element order; `#` comments).
+/// Coordinates are in the file's length unit.
+#[derive(Deserialize, Debug)]
+#[serde(untagged)]
+pub enum MoistureDef {
+    Constant(f64),
+    Map(MoistureMapDef),
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
+pub enum MoistureMapDef {
+    Gradient {
+        axis: [f64; 3],
+        from: [f64; 2],
+        to: [f64; 2],
+    },
+    Bands {
+        axis: [f64; 3],
+        edges: Vec<f64>,
+        values: Vec<f64>,
+    },
+    LeftRight {
+        axis: [f64; 3],
+        center: f64,
+        left: f64,
+        right: f64,
+    },
+    File(PathBuf),
+}
+
+/// A linear vector muscle (paper section 3.3).
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct MuscleDef {
+    pub name: String,
+    /// Origin (attached end) and insertion (pulled end), in the file's length unit.
+    pub origin: [f64; 3],
+    pub insertion: [f64; 3],
+    pub radius: f64,
+    /// Total force at full activation (N), shared equally by the nodes in the cylinder.
+    pub strength: f64,
+    /// Peak activation in [0, 1] (default 1).
+    pub activation: Option<f64>,
     #[serde(flatten)]
     pub curve: CurveDef,
 }
@@ -518,6 +608,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
         });
     }
 
+    let physics = read_physics(&sf, f, base, scale, &materials, &curve)?;
     let nd = &sf.numerics;
     let problem = Problem {
         source: file.clone(),
@@ -537,7 +628,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
             niftysim_timing: false,
         },
         additive_constraints: false,
-        physics: Default::default(),
+        physics,
     };
     problem.validate()?;
     Ok(Scenario {
@@ -545,4 +636,151 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
         title: sf.title,
         default_output: sf.output.dir.map(|d| base.join(d)),
     })
+}
+
+type CurveFn<'a> = dyn Fn(&CurveDef, &str, LoadShape) -> Result<LoadCurve> + 'a;
+
+fn read_physics(
+    sf: &ScenarioFile,
+    f: &str,
+    base: &Path,
+    scale: f64,
+    materials: &[MaterialSpec],
+    curve: &CurveFn,
+) -> Result<Physics> {
+    use crate::material::saliva::{Decay, EvaporationSchedule, MoistureMap, SalivaParams};
+    let mut physics = Physics::default();
+    let unit_axis = |a: [f64; 3], field: &str| -> Result<[f64; 3]> {
+        let n = crate::linalg::norm(&a);
+        if !(n > 0.0) || !n.is_finite() {
+            return Err(Error::field(f, field, "must be a non-zero vector"));
+        }
+        Ok(a.map(|v| v / n))
+    };
+    for (i, sd) in sf.saliva.iter().enumerate() {
+        let field = |k: &str| format!("saliva[{i}].{k}");
+        let material = materials
+            .iter()
+            .position(|m| m.name == sd.material)
+            .ok_or_else(|| {
+                Error::field(
+                    f,
+                    field("material"),
+                    format!("no material named `{}` in [[materials]]", sd.material),
+                )
+            })? as u32;
+        let initial_moisture = match &sd.initial_moisture {
+            MoistureDef::Constant(m) => MoistureMap::Constant(*m),
+            MoistureDef::Map(MoistureMapDef::Gradient { axis, from, to }) => {
+                MoistureMap::Gradient {
+                    axis: unit_axis(*axis, &field("initial_moisture.gradient.axis"))?,
+                    positions: (from[0] * scale, to[0] * scale),
+                    values: (from[1], to[1]),
+                }
+            }
+            MoistureDef::Map(MoistureMapDef::Bands {
+                axis,
+                edges,
+                values,
+            }) => {
+                if values.len() != edges.len() + 1 || edges.windows(2).any(|w| !(w[1] > w[0])) {
+                    return Err(Error::field(
+                        f,
+                        field("initial_moisture.bands"),
+                        "needs increasing edges and one more value than edges",
+                    ));
+                }
+                MoistureMap::Bands {
+                    axis: unit_axis(*axis, &field("initial_moisture.bands.axis"))?,
+                    edges: edges.iter().map(|e| e * scale).collect(),
+                    values: values.clone(),
+                }
+            }
+            MoistureDef::Map(MoistureMapDef::LeftRight {
+                axis,
+                center,
+                left,
+                right,
+            }) => MoistureMap::LeftRight {
+                axis: unit_axis(*axis, &field("initial_moisture.left_right.axis"))?,
+                center: center * scale,
+                left: *left,
+                right: *right,
+            },
+            MoistureDef::Map(MoistureMapDef::File(rel)) => {
+                let path = base.join(rel);
+                let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+                let mut v = Vec::new();
+                for (ln, line) in text.lines().enumerate() {
+                    let t = line.split('#').next().unwrap_or("").trim();
+                    if t.is_empty() {
+                        continue;
+                    }
+                    let x: f64 = t.parse().map_err(|_| {
+                        Error::input(
+                            path.display().to_string(),
+                            Location::Line(ln + 1),
+                            format!("`{t}` is not a number"),
+                        )
+                    })?;
+                    v.push(x);
+                }
+                MoistureMap::PerElement(v)
+            }
+        };
+        let evaporation = match (&sd.evaporation, sd.evaporation_rate) {
+            (Some(_), Some(_)) => {
+                return Err(Error::field(
+                    f,
+                    field("evaporation"),
+                    "give `evaporation` or `evaporation_rate`, not both",
+                ))
+            }
+            (Some(e), None) => EvaporationSchedule {
+                starts: e.starts.clone(),
+                rates: e.rates.clone(),
+            },
+            (None, r) => EvaporationSchedule::constant(r.unwrap_or(0.0)),
+        };
+        let decay = match (sd.decay_per_step, sd.decay_time) {
+            (Some(_), Some(_)) => {
+                return Err(Error::field(
+                    f,
+                    field("decay_time"),
+                    "give `decay_per_step` or `decay_time`, not both",
+                ))
+            }
+            (None, Some(t)) => Decay::Time(t),
+            (d, None) => Decay::PerStep(d.unwrap_or(0.99)),
+        };
+        let across = match sd.across {
+            Some(a) => Some(unit_axis(a, &field("across"))?),
+            None => None,
+        };
+        physics.saliva.push(SalivaSet {
+            material,
+            params: SalivaParams {
+                critical_moisture: sd.critical_moisture,
+                k_glue: sd.k_glue,
+                initial_moisture,
+                evaporation,
+                rule: sd.rule.unwrap_or_default(),
+                decay,
+                across,
+            },
+        });
+    }
+    for (i, md) in sf.muscle.iter().enumerate() {
+        let field = format!("muscle[{i}]");
+        physics.muscles.push(Muscle {
+            name: md.name.clone(),
+            origin: md.origin.map(|v| v * scale),
+            insertion: md.insertion.map(|v| v * scale),
+            radius: md.radius * scale,
+            strength: md.strength,
+            activation: md.activation.unwrap_or(1.0),
+            curve: curve(&md.curve, &field, LoadShape::SmoothStep)?,
+        });
+    }
+    Ok(physics)
 }

@@ -483,6 +483,113 @@ pub fn write_pvd(path: &Path, entries: &[PvdEntry]) -> io::Result<()> {
     write_atomic(path, s.as_bytes())
 }
 
+/// Decodes standard base64 (RFC 4648, with padding); `None` on malformed input.
+pub fn base64_decode(text: &str) -> Option<Vec<u8>> {
+    fn val(c: u8) -> Option<u32> {
+        Some(match c {
+            b'A'..=b'Z' => (c - b'A') as u32,
+            b'a'..=b'z' => (c - b'a' + 26) as u32,
+            b'0'..=b'9' => (c - b'0' + 52) as u32,
+            b'+' => 62,
+            b'/' => 63,
+            _ => return None,
+        })
+    }
+    let bytes: Vec<u8> = text.bytes().filter(|c| !c.is_ascii_whitespace()).collect();
+    if bytes.len() % 4 != 0 {
+        return None;
+    }
+    let mut out = Vec::with_capacity(bytes.len() / 4 * 3);
+    for chunk in bytes.chunks(4) {
+        let pad = chunk.iter().rev().take_while(|&&c| c == b'=').count();
+        if pad > 2 {
+            return None;
+        }
+        let mut n = 0u32;
+        for (i, &c) in chunk.iter().enumerate() {
+            let v = if i >= 4 - pad { 0 } else { val(c)? };
+            n = (n << 6) | v;
+        }
+        let b = [(n >> 16) as u8, (n >> 8) as u8, n as u8];
+        out.extend_from_slice(&b[..3 - pad]);
+    }
+    Some(out)
+}
+
+/// Reads a Float64 point-data array of one of our own `.vtu` files (inline binary,
+/// `header_type="UInt64"`, as written by [`write_vtu`]): `(values, components, points)`.
+/// Errors name the file and what is wrong.
+pub fn read_point_data_f64(
+    path: &Path,
+    name: &str,
+) -> crate::error::Result<(Vec<f64>, usize, usize)> {
+    use crate::error::{Error, Location};
+    let file = path.display().to_string();
+    let bad = |m: String| Error::input(file.clone(), Location::None, m);
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let doc = roxmltree::Document::parse(&text).map_err(|e| bad(format!("malformed XML: {e}")))?;
+    let piece = doc
+        .descendants()
+        .find(|n| n.has_tag_name("Piece"))
+        .ok_or_else(|| bad("no <Piece>".into()))?;
+    let points: usize = piece
+        .attribute("NumberOfPoints")
+        .and_then(|v| v.parse().ok())
+        .ok_or_else(|| bad("<Piece> lacks NumberOfPoints".into()))?;
+    let arr = piece
+        .descendants()
+        .filter(|n| n.has_tag_name("PointData"))
+        .flat_map(|pd| pd.children())
+        .find(|n| n.has_tag_name("DataArray") && n.attribute("Name") == Some(name))
+        .ok_or_else(|| bad(format!("no point-data array `{name}`")))?;
+    let comps: usize = arr
+        .attribute("NumberOfComponents")
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1);
+    if arr.attribute("type") != Some("Float64") {
+        return Err(bad(format!("array `{name}` is not Float64")));
+    }
+    let body = arr.text().unwrap_or("");
+    let values: Vec<f64> = match arr.attribute("format") {
+        Some("binary") => {
+            let raw = base64_decode(body)
+                .ok_or_else(|| bad(format!("array `{name}`: malformed base64")))?;
+            if raw.len() < 8 {
+                return Err(bad(format!("array `{name}`: truncated")));
+            }
+            let n = u64::from_le_bytes(raw[..8].try_into().unwrap()) as usize;
+            if raw.len() != 8 + n || n % 8 != 0 {
+                return Err(bad(format!(
+                    "array `{name}`: byte count {n} does not match the data"
+                )));
+            }
+            raw[8..]
+                .chunks_exact(8)
+                .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+                .collect()
+        }
+        Some("ascii") => body
+            .split_whitespace()
+            .map(|t| {
+                t.parse::<f64>()
+                    .map_err(|_| bad(format!("array `{name}`: `{t}` is not a number")))
+            })
+            .collect::<crate::error::Result<_>>()?,
+        other => {
+            return Err(bad(format!(
+                "array `{name}`: format {other:?} is not supported (binary or ascii)"
+            )))
+        }
+    };
+    if values.len() != comps * points {
+        return Err(bad(format!(
+            "array `{name}` has {} values for {points} points x {comps}",
+            values.len()
+        )));
+    }
+    Ok((values, comps, points))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -623,6 +730,47 @@ mod tests {
             })
             .collect();
         (pts, hexes)
+    }
+
+    #[test]
+    fn base64_decode_inverts_encode_and_rejects_garbage() {
+        for len in 0..40usize {
+            let bytes: Vec<u8> = (0..len).map(|i| (i * 37 + 11) as u8).collect();
+            assert_eq!(base64_decode(&base64_encode(&bytes)).unwrap(), bytes);
+        }
+        assert!(base64_decode("abc").is_none());
+        assert!(base64_decode("ab$=").is_none());
+    }
+
+    #[test]
+    fn read_point_data_returns_the_written_bits() {
+        let (pts, hexes) = two_hex();
+        let disp: Vec<f64> = (0..pts.len() * 3)
+            .map(|i| (i as f64 + 0.1).ln() * 1e-3)
+            .collect();
+        let frame = VtuFrame {
+            points: &pts,
+            hexahedra: &hexes,
+            point_data: vec![DataArray::F64 {
+                name: "displacement",
+                components: 3,
+                data: &disp,
+            }],
+            cell_data: vec![],
+            time: None,
+        };
+        let dir = std::env::temp_dir().join(format!("vtu-read-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("f.vtu");
+        write_vtu(&path, &frame).unwrap();
+        let (v, c, n) = read_point_data_f64(&path, "displacement").unwrap();
+        assert_eq!((c, n), (3, pts.len()));
+        assert!(v.iter().zip(&disp).all(|(a, b)| a.to_bits() == b.to_bits()));
+        let e = read_point_data_f64(&path, "velocity")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("f.vtu") && e.contains("velocity"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]

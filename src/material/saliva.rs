@@ -42,6 +42,13 @@ pub fn herz_knudsen_flux(
         / (2.0 * std::f64::consts::PI * molecule_mass * BOLTZMANN * temperature).sqrt()
 }
 
+/// Saturation vapour pressure of water over a flat liquid surface (Pa) at `celsius` (C), by
+/// the Buck (1996) equation `611.21 exp((18.678 - T/234.5) (T / (257.14 + T)))`, accurate to
+/// about 0.05 % between 0 and 50 C. Used for `p_liq` in eq. (5) by the `evaporation` command.
+pub fn water_saturation_pressure(celsius: f64) -> f64 {
+    611.21 * ((18.678 - celsius / 234.5) * (celsius / (257.14 + celsius))).exp()
+}
+
 /// Eq. (5) converted to the quantities a user of the model needs.
 #[derive(Clone, Copy, Debug, serde::Serialize)]
 pub struct EvaporationRates {
@@ -314,6 +321,24 @@ pub struct SalivaParams {
     /// The local y axis (across the layer) for every element of the set; `None` = found
     /// from each element's reference geometry ([`across_direction`]).
     pub across: Option<[f64; 3]>,
+}
+
+impl SalivaParams {
+    /// The first moisture value of the map that is negative or not finite, if any.
+    pub fn initial_moisture_values_invalid(&self) -> Option<f64> {
+        let bad = |v: &f64| !(v.is_finite() && *v >= 0.0);
+        match &self.initial_moisture {
+            MoistureMap::Constant(m) => bad(m).then_some(*m),
+            MoistureMap::Gradient { values, .. } => {
+                [values.0, values.1].into_iter().find(|v| bad(v))
+            }
+            MoistureMap::Bands { values, .. } => values.iter().copied().find(|v| bad(v)),
+            MoistureMap::LeftRight { left, right, .. } => {
+                [*left, *right].into_iter().find(|v| bad(v))
+            }
+            MoistureMap::PerElement(v) => v.iter().copied().find(|v| bad(v)),
+        }
+    }
 }
 
 /// The direction across a flat element: of the three lines joining opposite face centres

@@ -177,7 +177,8 @@ fn plan_saliva(p: &Problem) -> SalivaPlan {
                 c[k] += xa[k] / 8.0;
             }
         }
-        let k = plan.elements.len();
+        // index of this element within its own saliva set (for per-element moisture files)
+        let k = plan.group.iter().filter(|&&h| h == g as u32).count();
         plan.elements.push(e as u32);
         plan.across.push(across);
         plan.initial_moisture
