@@ -68,6 +68,8 @@ pub struct MeshSection {
     pub seed: Option<u64>,
     /// Mesh file, relative to the scenario file (`niftysim`).
     pub file: Option<PathBuf>,
+    /// Layers stacked along z, bottom first (`layers`): `{ name, thickness, cells }`.
+    pub layers: Option<Vec<generate::Layer>>,
 }
 
 #[derive(Deserialize, Debug)]
@@ -367,6 +369,25 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
                 generate::distorted_block(origin, size, cells, frac, m.seed.unwrap_or(1))
             }
         }
+        "layers" => {
+            let layers = m.layers.clone().ok_or_else(|| Error::field(f, "mesh.layers", "required by the layers generator"))?;
+            let cells = m.cells.ok_or_else(|| Error::field(f, "mesh.cells", "required (x and y counts; z is ignored)"))?;
+            let size = sc3(need(m.size, "size")?);
+            if cells[0] == 0 || cells[1] == 0 || !(size[0] > 0.0 && size[1] > 0.0) {
+                return Err(Error::field(f, "mesh.size", "x and y sizes and cell counts must be positive"));
+            }
+            if layers.is_empty() {
+                return Err(Error::field(f, "mesh.layers", "at least one layer"));
+            }
+            let mut scaled = layers.clone();
+            for (i, l) in scaled.iter_mut().enumerate() {
+                if !(l.thickness > 0.0) || l.cells == 0 {
+                    return Err(Error::field(f, format!("mesh.layers[{i}]"), "thickness and cells must be positive"));
+                }
+                l.thickness *= scale;
+            }
+            generate::layered_block(sc3(m.origin.unwrap_or([0.0; 3])), [size[0], size[1]], [cells[0], cells[1]], &scaled)
+        }
         "niftysim" => {
             let rel = m.file.as_ref().ok_or_else(|| {
                 Error::field(f, "mesh.file", "required by the niftysim generator")
@@ -389,7 +410,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
             return Err(Error::field(
                 f,
                 "mesh.generator",
-                format!("unknown generator `{o}` (block, distorted_block, niftysim)"),
+                format!("unknown generator `{o}` (block, distorted_block, layers, niftysim)"),
             ))
         }
     };

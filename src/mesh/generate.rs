@@ -118,3 +118,50 @@ pub fn distorted_block(
     }
     mesh
 }
+
+/// One layer of a [`layered_block`]: its thickness along z (m), its number of cells
+/// through the thickness, and the name of its element set.
+#[derive(Clone, Debug, PartialEq, serde::Deserialize)]
+pub struct Layer {
+    pub name: String,
+    pub thickness: f64,
+    pub cells: usize,
+}
+
+/// A block stacked from layers along z (bottom first), each its own element set, e.g. two
+/// tissue slabs joined by a thin saliva layer. `size_xy`/`cells_xy` give the footprint.
+/// Node sets as for [`block`] (`z_min` is the bottom of the first layer, `z_max` the top of
+/// the last), plus `LAYER_bottom` and `LAYER_top` for each layer's bounding planes.
+pub fn layered_block(origin: [f64; 3], size_xy: [f64; 2], cells_xy: [usize; 2], layers: &[Layer]) -> Mesh {
+    let nz: usize = layers.iter().map(|l| l.cells).sum();
+    let total: f64 = layers.iter().map(|l| l.thickness).sum();
+    let mut mesh = block(origin, [size_xy[0], size_xy[1], total], [cells_xy[0], cells_xy[1], nz]);
+    // move node planes to the layer boundaries
+    let mut z_planes = Vec::with_capacity(nz + 1);
+    let mut z = origin[2];
+    z_planes.push(z);
+    for l in layers {
+        for _ in 0..l.cells {
+            z += l.thickness / l.cells as f64;
+            z_planes.push(z);
+        }
+    }
+    let per_plane = (cells_xy[0] + 1) * (cells_xy[1] + 1);
+    for (n, x) in mesh.nodes.iter_mut().enumerate() {
+        x[2] = z_planes[n / per_plane];
+    }
+    let per_layer_cells = cells_xy[0] * cells_xy[1];
+    let mut k0 = 0;
+    for l in layers {
+        let first = k0 * per_layer_cells;
+        let last = (k0 + l.cells) * per_layer_cells;
+        mesh.element_sets.insert(l.name.clone(), (first as u32..last as u32).collect());
+        mesh.node_sets.insert(format!("{}_bottom", l.name), (k0 * per_plane..(k0 + 1) * per_plane).map(|n| n as u32).collect());
+        mesh.node_sets.insert(
+            format!("{}_top", l.name),
+            ((k0 + l.cells) * per_plane..(k0 + l.cells + 1) * per_plane).map(|n| n as u32).collect(),
+        );
+        k0 += l.cells;
+    }
+    mesh
+}
