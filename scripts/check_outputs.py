@@ -59,6 +59,7 @@ class Frame:
     displacement: np.ndarray  # (n, 3) float64
     material: np.ndarray  # (m,) int32
     time_value: float | None  # FieldData TimeValue, if present
+    cell: dict  # every cell-data array, flattened to one value per cell
 
 
 def read_pvd(path: Path) -> list[tuple[float, str]]:
@@ -102,7 +103,9 @@ def read_frame(path: Path, time: float | None = None) -> Frame:
         a = np.asarray(m.field_data["TimeValue"]).ravel()
         assert a.size == 1, f"{path}: TimeValue has {a.size} values"
         tv = float(a[0])
-    return Frame(path, time, np.asarray(m.points), hexes, u, mat.ravel(), tv)
+    cell = {k: np.concatenate([np.asarray(a).reshape(len(cb.data), -1) for a, cb in zip(v, m.cells)]).ravel()
+            for k, v in m.cell_data.items()}
+    return Frame(path, time, np.asarray(m.points), hexes, u, mat.ravel(), tv, cell)
 
 
 def load_run(d: Path) -> tuple[list[tuple[float, str]], list[Frame], Frame, dict]:
@@ -277,6 +280,39 @@ def test_final_equals_last_frame(run):
 def test_summary(run):
     _, entries, _, _, summary = run
     check_summary(summary, entries)
+
+
+SALIVA_ARRAYS = ("saliva_moisture", "saliva_Z", "saliva_Q", "saliva_broken", "saliva_broken_at")
+
+
+def test_saliva_fields(run):
+    """Runs with saliva elements carry their per-element state, consistent with the summary."""
+    _, entries, frames, final, summary = run
+    n_saliva = summary.get("saliva_elements", 0)
+    if not n_saliva:
+        for fr in frames:
+            assert not any(k in fr.cell for k in SALIVA_ARRAYS), f"{fr.path}: saliva arrays without saliva elements"
+        return
+    broken_series = summary["broken_saliva"]
+    assert len(broken_series) == len(frames), "broken_saliva has one count per frame"
+    for fr, count in zip(frames + [final], broken_series + [broken_series[-1]]):
+        for k in SALIVA_ARRAYS:
+            assert k in fr.cell, f"{fr.path}: missing cell data {k}"
+        b = fr.cell["saliva_broken"]
+        is_saliva = b >= 0
+        assert is_saliva.sum() == n_saliva, f"{fr.path}: {is_saliva.sum()} saliva cells, summary says {n_saliva}"
+        assert set(np.unique(b)) <= {-1, 0, 1}, f"{fr.path}: saliva_broken values {np.unique(b)}"
+        assert int((b == 1).sum()) == count, f"{fr.path}: {(b == 1).sum()} broken, summary says {count}"
+        for k in ("saliva_moisture", "saliva_Z", "saliva_Q"):
+            v = fr.cell[k]
+            assert np.all(np.isnan(v[~is_saliva])), f"{fr.path}: {k} defined on tissue cells"
+            assert np.all(np.isfinite(v[is_saliva])), f"{fr.path}: {k} not finite on saliva cells"
+        z = fr.cell["saliva_Z"][is_saliva]
+        assert np.all((z >= 1.0) | np.isnan(z)), f"{fr.path}: breaking point Z below 1"
+        t_b = fr.cell["saliva_broken_at"]
+        assert np.all(np.isnan(t_b[b == 0]) | (t_b[b == 0] <= (fr.time if fr.time is not None else np.inf)))
+        if fr.time is not None:
+            assert np.all(t_b[b == 1] <= fr.time + 1e-12), f"{fr.path}: broken in the future"
 
 
 def test_fixture_exact_values():

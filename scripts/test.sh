@@ -50,7 +50,10 @@ rm -rf "$OUT"
 SHARED="${STICKY_LIPS_SHARED:-$ROOT/../shared}"
 "$BIN" run "$SHARED/oracle/niftysim/block4_compress.xml" --niftysim-compat --out "$OUT/block4" --quiet
 "$BIN" equilibrium examples/cantilever.toml --out "$OUT/cantilever_static"
-for d in cantilever cantilever_f32 block4 cantilever_static; do
+"$BIN" run examples/sticky_slabs.toml --out "$OUT/sticky_slabs" --quiet
+"$BIN" blend examples/cantilever.toml --shape "$OUT/cantilever/final.vtu=0.5" --out "$OUT/cantilever_blend"
+"$BIN" evaporation
+for d in cantilever cantilever_f32 block4 cantilever_static sticky_slabs cantilever_blend; do
   STICKY_LIPS_OUT="$OUT/$d" "$PY" -m pytest -q scripts/check_outputs.py
 done
 printf '\nall checks passed\n'

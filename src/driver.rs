@@ -198,6 +198,7 @@ pub fn equilibrium(
         )?;
         writer.frame(problem.time.total_time, &res.u, &disc, None)?;
         let strain = crate::tled::solver::strain_energy(&disc, &res.u);
+        let report = analyse(problem, &disc);
         let summary = RunSummary {
             input: problem.source.clone(),
             kind: "static",
@@ -213,8 +214,8 @@ pub fn equilibrium(
             num_elements: problem.mesh.elements.len(),
             variant: format!("{:?}", problem.numerics.variant),
             niftysim_timing: problem.numerics.niftysim_timing,
-            critical_time_step: f64::NAN,
-            stability: None,
+            critical_time_step: report.critical_time_step,
+            stability: Some(report),
             frames: 1,
             energy: EnergySeries {
                 time: vec![problem.time.total_time],

@@ -7,5 +7,6 @@ mod inputs;
 mod niftysim;
 mod patch;
 mod precision;
+mod saliva;
 mod skfem;
 mod time_integration;

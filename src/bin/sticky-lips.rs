@@ -441,7 +441,7 @@ fn blend(input: &InputArgs, shapes: &[String], out: &Path) -> sticky_lips::Resul
     let summary = serde_json::json!({
         "input": p.source, "kind": "blend", "shapes": shapes, "steps": 0, "simulated_time": 0.0,
         "wall_time": 0.0, "element_updates_per_second": 0.0, "precision": "f64", "threads": 1,
-        "critical_time_step": null, "frames": 1,
+        "critical_time_step": stability::analyse(&p, &disc).critical_time_step, "frames": 1,
         "energy": {"time": [0.0], "kinetic": [0.0], "strain": [sticky_lips::tled::solver::strain_energy(&disc, &u)]},
     });
     w.finish(&disc, &summary)?;

@@ -370,11 +370,19 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
             }
         }
         "layers" => {
-            let layers = m.layers.clone().ok_or_else(|| Error::field(f, "mesh.layers", "required by the layers generator"))?;
-            let cells = m.cells.ok_or_else(|| Error::field(f, "mesh.cells", "required (x and y counts; z is ignored)"))?;
+            let layers = m.layers.clone().ok_or_else(|| {
+                Error::field(f, "mesh.layers", "required by the layers generator")
+            })?;
+            let cells = m.cells.ok_or_else(|| {
+                Error::field(f, "mesh.cells", "required (x and y counts; z is ignored)")
+            })?;
             let size = sc3(need(m.size, "size")?);
             if cells[0] == 0 || cells[1] == 0 || !(size[0] > 0.0 && size[1] > 0.0) {
-                return Err(Error::field(f, "mesh.size", "x and y sizes and cell counts must be positive"));
+                return Err(Error::field(
+                    f,
+                    "mesh.size",
+                    "x and y sizes and cell counts must be positive",
+                ));
             }
             if layers.is_empty() {
                 return Err(Error::field(f, "mesh.layers", "at least one layer"));
@@ -382,11 +390,20 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
             let mut scaled = layers.clone();
             for (i, l) in scaled.iter_mut().enumerate() {
                 if !(l.thickness > 0.0) || l.cells == 0 {
-                    return Err(Error::field(f, format!("mesh.layers[{i}]"), "thickness and cells must be positive"));
+                    return Err(Error::field(
+                        f,
+                        format!("mesh.layers[{i}]"),
+                        "thickness and cells must be positive",
+                    ));
                 }
                 l.thickness *= scale;
             }
-            generate::layered_block(sc3(m.origin.unwrap_or([0.0; 3])), [size[0], size[1]], [cells[0], cells[1]], &scaled)
+            generate::layered_block(
+                sc3(m.origin.unwrap_or([0.0; 3])),
+                [size[0], size[1]],
+                [cells[0], cells[1]],
+                &scaled,
+            )
         }
         "niftysim" => {
             let rel = m.file.as_ref().ok_or_else(|| {

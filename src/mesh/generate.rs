@@ -132,10 +132,19 @@ pub struct Layer {
 /// tissue slabs joined by a thin saliva layer. `size_xy`/`cells_xy` give the footprint.
 /// Node sets as for [`block`] (`z_min` is the bottom of the first layer, `z_max` the top of
 /// the last), plus `LAYER_bottom` and `LAYER_top` for each layer's bounding planes.
-pub fn layered_block(origin: [f64; 3], size_xy: [f64; 2], cells_xy: [usize; 2], layers: &[Layer]) -> Mesh {
+pub fn layered_block(
+    origin: [f64; 3],
+    size_xy: [f64; 2],
+    cells_xy: [usize; 2],
+    layers: &[Layer],
+) -> Mesh {
     let nz: usize = layers.iter().map(|l| l.cells).sum();
     let total: f64 = layers.iter().map(|l| l.thickness).sum();
-    let mut mesh = block(origin, [size_xy[0], size_xy[1], total], [cells_xy[0], cells_xy[1], nz]);
+    let mut mesh = block(
+        origin,
+        [size_xy[0], size_xy[1], total],
+        [cells_xy[0], cells_xy[1], nz],
+    );
     // move node planes to the layer boundaries
     let mut z_planes = Vec::with_capacity(nz + 1);
     let mut z = origin[2];
@@ -155,11 +164,19 @@ pub fn layered_block(origin: [f64; 3], size_xy: [f64; 2], cells_xy: [usize; 2], 
     for l in layers {
         let first = k0 * per_layer_cells;
         let last = (k0 + l.cells) * per_layer_cells;
-        mesh.element_sets.insert(l.name.clone(), (first as u32..last as u32).collect());
-        mesh.node_sets.insert(format!("{}_bottom", l.name), (k0 * per_plane..(k0 + 1) * per_plane).map(|n| n as u32).collect());
+        mesh.element_sets
+            .insert(l.name.clone(), (first as u32..last as u32).collect());
+        mesh.node_sets.insert(
+            format!("{}_bottom", l.name),
+            (k0 * per_plane..(k0 + 1) * per_plane)
+                .map(|n| n as u32)
+                .collect(),
+        );
         mesh.node_sets.insert(
             format!("{}_top", l.name),
-            ((k0 + l.cells) * per_plane..(k0 + l.cells + 1) * per_plane).map(|n| n as u32).collect(),
+            ((k0 + l.cells) * per_plane..(k0 + l.cells + 1) * per_plane)
+                .map(|n| n as u32)
+                .collect(),
         );
         k0 += l.cells;
     }

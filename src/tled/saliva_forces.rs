@@ -39,7 +39,12 @@ impl<T: Real> SalivaState<T> {
             broken: vec![false; n],
             broken_at: vec![f64::NAN; n],
             moisture: plan.initial_moisture.clone(),
-            z: vec![f64::NAN; n],
+            z: (0..n)
+                .map(|k| {
+                    let g = &plan.groups[plan.group[k] as usize];
+                    breaking_point(plan.initial_moisture[k], g.critical_moisture, g.k_glue)
+                })
+                .collect(),
             q: vec![1.0; n],
         }
     }
