@@ -20,6 +20,7 @@ pub mod error;
 pub mod io;
 pub mod linalg;
 pub mod material;
+pub mod measures;
 pub mod mesh;
 pub mod muscle;
 pub mod problem;
