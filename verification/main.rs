@@ -4,6 +4,7 @@
 mod common;
 mod element;
 mod inputs;
+mod muscle_jaw_blend;
 mod niftysim;
 mod patch;
 mod precision;
