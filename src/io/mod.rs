@@ -1,5 +1,6 @@
 pub mod atomic;
 pub mod niftysim;
+pub mod obj;
 pub mod output;
 pub mod scenario;
 pub mod vtu;

@@ -95,7 +95,11 @@ impl QuadSurface {
             return Err(Error::input(
                 file,
                 Location::None,
-                format!("{} quads but {} quad lines", self.quads.len(), self.quad_lines.len()),
+                format!(
+                    "{} quads but {} quad lines",
+                    self.quads.len(),
+                    self.quad_lines.len()
+                ),
             ));
         }
         if let Some(uv) = &self.uv {
@@ -121,7 +125,10 @@ impl QuadSurface {
                 return Err(Error::input(
                     file,
                     self.quad_location(q),
-                    format!("vertex index {} is out of range: there are {nv} vertices", i + 1),
+                    format!(
+                        "vertex index {} is out of range: there are {nv} vertices",
+                        i + 1
+                    ),
                 ));
             }
             let g = self.group_of_quad[q] as usize;
@@ -129,7 +136,10 @@ impl QuadSurface {
                 return Err(Error::input(
                     file,
                     self.quad_location(q),
-                    format!("group index {g} is out of range: there are {} groups", self.groups.len()),
+                    format!(
+                        "group index {g} is out of range: there are {} groups",
+                        self.groups.len()
+                    ),
                 ));
             }
         }
@@ -184,9 +194,8 @@ fn parse_index(tok: &str, count: usize, what: &str, file: &str, line: usize) -> 
 }
 
 fn parse_f64(tok: Option<&str>, what: &str, file: &str, line: usize) -> Result<f64> {
-    let tok = tok.ok_or_else(|| {
-        Error::input(file, Location::Line(line), format!("missing {what}"))
-    })?;
+    let tok =
+        tok.ok_or_else(|| Error::input(file, Location::Line(line), format!("missing {what}")))?;
     let x: f64 = tok.parse().map_err(|_| {
         Error::input(
             file,
@@ -293,9 +302,13 @@ pub fn parse_obj(text: &str, file: &str) -> Result<QuadSurface> {
                     let vi = parts.next().unwrap_or("");
                     let v = parse_index(vi, vertices.len(), "vertex", file, line_no)?;
                     let t = match parts.next() {
-                        Some(ti) if !ti.is_empty() => {
-                            Some(parse_index(ti, texcoords.len(), "texture coordinate", file, line_no)?)
-                        }
+                        Some(ti) if !ti.is_empty() => Some(parse_index(
+                            ti,
+                            texcoords.len(),
+                            "texture coordinate",
+                            file,
+                            line_no,
+                        )?),
                         _ => None,
                     };
                     c[k] = Corner { v, t };
@@ -404,7 +417,13 @@ pub fn parse_obj(text: &str, file: &str) -> Result<QuadSurface> {
 
 /// Writes `s` as OBJ text into `w`.
 pub fn write_obj_to(w: &mut dyn Write, s: &QuadSurface) -> std::io::Result<()> {
-    writeln!(w, "# sticky-lips quad surface: {} vertices, {} quads, {} groups", s.vertices.len(), s.quads.len(), s.groups.len())?;
+    writeln!(
+        w,
+        "# sticky-lips quad surface: {} vertices, {} quads, {} groups",
+        s.vertices.len(),
+        s.quads.len(),
+        s.groups.len()
+    )?;
     for x in &s.vertices {
         writeln!(w, "v {} {} {}", x[0], x[1], x[2])?;
     }
@@ -417,7 +436,11 @@ pub fn write_obj_to(w: &mut dyn Write, s: &QuadSurface) -> std::io::Result<()> {
     for (q, quad) in s.quads.iter().enumerate() {
         let g = s.group_of_quad[q];
         if last != Some(g) {
-            let name = s.groups.get(g as usize).map(String::as_str).unwrap_or("default");
+            let name = s
+                .groups
+                .get(g as usize)
+                .map(String::as_str)
+                .unwrap_or("default");
             writeln!(w, "g {name}")?;
             writeln!(w, "usemtl {name}")?;
             last = Some(g);
@@ -435,7 +458,8 @@ pub fn write_obj_to(w: &mut dyn Write, s: &QuadSurface) -> std::io::Result<()> {
 /// Atomically writes `s` to `path` as OBJ (see the module docs).
 pub fn write_obj(path: &Path, s: &QuadSurface) -> Result<()> {
     s.validate(&path.display().to_string())?;
-    crate::io::atomic::write_atomic_with(path, |w| write_obj_to(w, s)).map_err(|e| Error::io(path, e))
+    crate::io::atomic::write_atomic_with(path, |w| write_obj_to(w, s))
+        .map_err(|e| Error::io(path, e))
 }
 
 #[cfg(test)]
@@ -505,13 +529,19 @@ f -5/-5 -4/-4 -1/-1 -2/-2
         assert!(e.contains("3 vertices") && e.contains("triangle"), "{e}");
         let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 2 0\nf 1 2 3 4 5\n";
         let e = msg(parse_obj(text, "pent.obj").unwrap_err());
-        assert!(e.starts_with("pent.obj:6:") && e.contains("5 vertices"), "{e}");
+        assert!(
+            e.starts_with("pent.obj:6:") && e.contains("5 vertices"),
+            "{e}"
+        );
     }
 
     #[test]
     fn bad_indices_and_numbers_are_errors() {
         let e = msg(parse_obj("v 0 0 0\nf 1 2 3 4\n", "a.obj").unwrap_err());
-        assert!(e.starts_with("a.obj:2:") && e.contains("out of range"), "{e}");
+        assert!(
+            e.starts_with("a.obj:2:") && e.contains("out of range"),
+            "{e}"
+        );
         let e = msg(parse_obj("v 0 0 0\nf 1 1 1 -2\n", "b.obj").unwrap_err());
         assert!(e.starts_with("b.obj:2:") && e.contains("-2"), "{e}");
         let e = msg(parse_obj("v 0 0 0\nf 0 1 1 1\n", "c.obj").unwrap_err());
@@ -526,7 +556,8 @@ f -5/-5 -4/-4 -1/-1 -2/-2
 
     #[test]
     fn continuation_comments_and_forward_references() {
-        let text = "f 1 2 \\\n 3 4 # a quad before its vertices\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+        let text =
+            "f 1 2 \\\n 3 4 # a quad before its vertices\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
         let s = parse_obj(text, "c.obj").unwrap();
         assert_eq!(s.quads, vec![[0, 1, 2, 3]]);
         assert_eq!(s.quad_lines, vec![1]);

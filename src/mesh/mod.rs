@@ -1,6 +1,8 @@
 //! Hexahedral meshes: geometry, named sets, topology and validation.
 
+pub mod extrude;
 pub mod generate;
+pub mod mouth;
 
 use crate::element::hex8;
 use crate::error::{Error, Location, Result};
