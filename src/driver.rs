@@ -97,7 +97,21 @@ fn run_typed<T: Real>(problem: &Problem, opts: &RunOptions) -> Result<RunSummary
     let mut energy = EnergySeries::default();
     let mut broken = Vec::new();
     let has_saliva = !sim.disc.saliva.elements.is_empty();
+    let mut measures = problem
+        .physics
+        .lip_columns
+        .clone()
+        .map(|c| crate::measures::RunMeasures::new(c, crate::measures::OPEN_THRESHOLD));
     let mut record = |sim: &Simulation<T>, writer: &mut FrameWriter| -> Result<()> {
+        let u = sim.displacement_f64();
+        if let Some(m) = measures.as_mut() {
+            m.push(
+                sim.time(),
+                &problem.mesh.nodes,
+                &u,
+                sim.saliva().broken_count(),
+            );
+        }
         let e = sim.energies();
         energy.time.push(sim.time());
         energy.kinetic.push(e.kinetic);
@@ -113,7 +127,7 @@ fn run_typed<T: Real>(problem: &Problem, opts: &RunOptions) -> Result<RunSummary
                 broken_at: s.broken_at.clone(),
             }
         });
-        writer.frame(sim.time(), &sim.displacement_f64(), &sim.disc, saliva)
+        writer.frame(sim.time(), &u, &sim.disc, saliva)
     };
     record(&sim, &mut writer)?;
     let n = sim.num_steps();
@@ -164,8 +178,27 @@ fn run_typed<T: Real>(problem: &Problem, opts: &RunOptions) -> Result<RunSummary
         newton_iterations: None,
         residual_norm: None,
     };
+    if let Some(m) = &measures {
+        write_measures(&opts.out, m)?;
+    }
     writer.finish(&sim.disc, &summary)?;
     Ok(summary)
+}
+
+/// `measures.json`, `gap.csv` (lip gap profiles) and `series.csv` (open fraction, broken
+/// saliva elements, asymmetry over time), written atomically.
+pub fn write_measures(dir: &std::path::Path, m: &crate::measures::RunMeasures) -> Result<()> {
+    use crate::io::atomic::write_atomic;
+    let w = |name: &str, bytes: &[u8]| {
+        let p = dir.join(name);
+        write_atomic(&p, bytes).map_err(|e| crate::error::Error::io(&p, e))
+    };
+    w(
+        "measures.json",
+        &serde_json::to_vec_pretty(m).expect("measures serialise"),
+    )?;
+    w("gap.csv", m.gap_csv().as_bytes())?;
+    w("series.csv", m.series_csv().as_bytes())
 }
 
 fn progress_bar(p: Progress, n: u64) -> Option<indicatif::ProgressBar> {

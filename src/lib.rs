@@ -25,6 +25,7 @@ pub mod mesh;
 pub mod muscle;
 pub mod problem;
 pub mod real;
+pub mod render;
 pub mod static_solve;
 pub mod tled;
 

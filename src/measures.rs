@@ -7,6 +7,10 @@
 //! the saliva layer. The gap at a column is their current distance minus their reference
 //! distance (the saliva layer's thickness), so a closed mouth has gap 0.
 
+/// Gap above which a column of the lips counts as open (m): 1 mm, about twice the saliva
+/// layer's thickness and well below a visible opening (the paper's mouth opens by ~10 mm).
+pub const OPEN_THRESHOLD: f64 = 1.0e-3;
+
 /// The columns along the mouth width, sorted by `x` (m).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LipColumns {

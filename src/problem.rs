@@ -66,6 +66,8 @@ pub struct SalivaSet {
 pub struct Physics {
     pub saliva: Vec<SalivaSet>,
     pub muscles: Vec<Muscle>,
+    /// Where to measure the lip gap (mouth models): written as measures with every run.
+    pub lip_columns: Option<crate::measures::LipColumns>,
 }
 
 #[derive(Clone, Debug)]

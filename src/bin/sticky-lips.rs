@@ -112,6 +112,36 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Generate the procedural mouth: its quad surface (OBJ with groups and texture
+    /// coordinates), the extruded hexahedral mesh (VTU, and NiftySim XML with Table 1's
+    /// materials), and a JSON description (hinge, muscles, node sets, counts).
+    Mouth {
+        /// Mouth parameters (TOML, the `[mesh.mouth]` table's fields); defaults otherwise.
+        #[arg(long)]
+        params: Option<PathBuf>,
+        /// Resolution multiplier (1 = the paper's ~3400 hexahedra); overrides the file.
+        #[arg(long)]
+        resolution: Option<f64>,
+        #[arg(long, default_value = "out/mouth")]
+        out: PathBuf,
+    },
+    /// Extrude a quad OBJ surface (with groups) into hexahedra, as the paper's pipeline did.
+    Extrude {
+        /// The surface: Wavefront OBJ, quads only, consistently oriented.
+        surface: PathBuf,
+        /// Thickness (m) for every group without its own.
+        #[arg(long)]
+        thickness: Option<f64>,
+        /// Thickness for one group: NAME=METRES. Repeatable.
+        #[arg(long = "group")]
+        groups: Vec<String>,
+        /// Extrude along this fixed direction X,Y,Z (into the body) instead of the normals.
+        #[arg(long)]
+        direction: Option<String>,
+        /// Output directory: mesh.vtu and model.xml (NiftySim format, Table 1 tissue material).
+        #[arg(long, default_value = "out/extruded")]
+        out: PathBuf,
+    },
     /// Blend shapes (paper eq. 1): x' = X + sum_i w_i B_i, written as an output frame.
     Blend {
         /// The model the shapes belong to (its reference positions X and mesh).
@@ -282,6 +312,18 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             )?;
         }
         Command::Blend { input, shapes, out } => blend(&input, &shapes, &out)?,
+        Command::Mouth {
+            params,
+            resolution,
+            out,
+        } => mouth(params.as_deref(), resolution, &out)?,
+        Command::Extrude {
+            surface,
+            thickness,
+            groups,
+            direction,
+            out,
+        } => extrude(&surface, thickness, &groups, direction.as_deref(), &out)?,
         Command::Check { input } => {
             let (p, _) = load(&input)?;
             let st = p.mesh.stats();
@@ -448,6 +490,205 @@ fn blend(input: &InputArgs, shapes: &[String], out: &Path) -> sticky_lips::Resul
     println!(
         "blend of {} shape(s) written to {}",
         shapes.len(),
+        out.display()
+    );
+    Ok(())
+}
+
+/// Table 1's materials, used for meshes written without a scenario: (mu, K, rho).
+const TABLE1_TISSUE: (f64, f64, f64) = (800.0, 7000.0, 1050.0);
+const TABLE1_SALIVA: (f64, f64, f64) = (7700.0, 191000.0, 1050.0);
+
+fn write_mesh_outputs(
+    out: &Path,
+    mesh: &sticky_lips::mesh::Mesh,
+    groups: &[(String, Vec<u32>)],
+) -> sticky_lips::Result<()> {
+    use sticky_lips::error::Error;
+    use sticky_lips::io::vtu::{write_vtu, DataArray, VtuFrame};
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    let mut material = vec![0i32; mesh.elements.len()];
+    for (g, (_, els)) in groups.iter().enumerate() {
+        for &e in els {
+            material[e as usize] = g as i32;
+        }
+    }
+    let zero = vec![0.0; 3 * mesh.nodes.len()];
+    let frame = VtuFrame {
+        points: &mesh.nodes,
+        hexahedra: &mesh.elements,
+        point_data: vec![DataArray::F64 {
+            name: "displacement",
+            components: 3,
+            data: &zero,
+        }],
+        cell_data: vec![DataArray::I32 {
+            name: "material",
+            components: 1,
+            data: &material,
+        }],
+        time: None,
+    };
+    let vtu = out.join("mesh.vtu");
+    write_vtu(&vtu, &frame).map_err(|e| Error::io(&vtu, e))?;
+    let sets: Vec<niftysim::SetMaterial> = groups
+        .iter()
+        .map(|(name, els)| {
+            let (mu, bulk, density) = if name == "saliva" {
+                TABLE1_SALIVA
+            } else {
+                TABLE1_TISSUE
+            };
+            niftysim::SetMaterial {
+                elements: els,
+                mu,
+                bulk,
+                density,
+            }
+        })
+        .collect();
+    niftysim::write_model(&out.join("model.xml"), mesh, &sets, 1e-5, 1.0, 80.0, 0.075)
+}
+
+fn mouth(params: Option<&Path>, resolution: Option<f64>, out: &Path) -> sticky_lips::Result<()> {
+    use sticky_lips::error::{Error, Location};
+    use sticky_lips::mesh::mouth;
+    let mut p: mouth::MouthParams = match params {
+        Some(path) => {
+            let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+            toml::from_str(&text).map_err(|e| {
+                let line = e.span().map(|r| text[..r.start].matches('\n').count() + 1);
+                Error::input(
+                    path.display().to_string(),
+                    line.map(Location::Line).unwrap_or(Location::None),
+                    e.message(),
+                )
+            })?
+        }
+        None => mouth::MouthParams::default(),
+    };
+    if let Some(r) = resolution {
+        p.resolution = r;
+    }
+    let t0 = std::time::Instant::now();
+    let model = mouth::generate(&p)?;
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    sticky_lips::io::obj::write_obj(&out.join("mouth.obj"), &model.surface)?;
+    let groups: Vec<(String, Vec<u32>)> = ["upper_face", "lower_face", "saliva"]
+        .iter()
+        .map(|g| {
+            (
+                g.to_string(),
+                model.mesh.element_sets.get(*g).cloned().unwrap_or_default(),
+            )
+        })
+        .collect();
+    write_mesh_outputs(out, &model.mesh, &groups)?;
+    let info = serde_json::json!({
+        "hexahedra": model.mesh.elements.len(),
+        "nodes": model.mesh.nodes.len(),
+        "params": p,
+        "jaw_hinge": {"point": model.jaw_hinge.0, "axis": model.jaw_hinge.1},
+        "muscles": model.muscles.iter().map(|m| serde_json::json!({
+            "name": m.name, "origin": m.origin, "insertion": m.insertion, "radius": m.radius,
+            "nodes": m.select_nodes(&model.mesh.nodes).len()})).collect::<Vec<_>>(),
+        "node_sets": model.mesh.node_sets.iter().map(|(k, v)| (k.clone(), v.len())).collect::<std::collections::BTreeMap<_, _>>(),
+        "element_sets": model.mesh.element_sets.iter().map(|(k, v)| (k.clone(), v.len())).collect::<std::collections::BTreeMap<_, _>>(),
+        "saliva_columns": model.saliva_columns.len(),
+    });
+    let path = out.join("mouth.json");
+    sticky_lips::io::atomic::write_atomic(
+        &path,
+        serde_json::to_string_pretty(&info)
+            .expect("json")
+            .as_bytes(),
+    )
+    .map_err(|e| Error::io(&path, e))?;
+    println!(
+        "mouth: {} hexahedra, {} nodes ({} saliva elements) in {:.2} s; wrote mouth.obj, mesh.vtu, model.xml, mouth.json to {}",
+        model.mesh.elements.len(),
+        model.mesh.nodes.len(),
+        model.mesh.element_sets.get("saliva").map_or(0, |s| s.len()),
+        t0.elapsed().as_secs_f64(),
+        out.display()
+    );
+    Ok(())
+}
+
+fn extrude(
+    surface: &Path,
+    thickness: Option<f64>,
+    groups: &[String],
+    direction: Option<&str>,
+    out: &Path,
+) -> sticky_lips::Result<()> {
+    use sticky_lips::error::{Error, Location};
+    use sticky_lips::mesh::extrude;
+    let file = surface.display().to_string();
+    let s = sticky_lips::io::obj::read_obj(surface)?;
+    let mut per_group = Vec::new();
+    for g in groups {
+        let (name, t) = g.split_once('=').ok_or_else(|| {
+            Error::input(
+                "--group",
+                Location::None,
+                format!("`{g}`: expected NAME=METRES"),
+            )
+        })?;
+        let t: f64 = t.parse().map_err(|_| {
+            Error::input(
+                "--group",
+                Location::None,
+                format!("`{t}` is not a thickness"),
+            )
+        })?;
+        per_group.push((name.to_string(), t));
+    }
+    let t = extrude::group_thickness(&s, thickness, &per_group, &file)?;
+    let dir = match direction {
+        None => extrude::Direction::Normal,
+        Some(d) => {
+            let v: Vec<f64> = d
+                .split(',')
+                .map(|c| c.trim().parse::<f64>())
+                .collect::<Result<_, _>>()
+                .map_err(|_| {
+                    Error::input(
+                        "--direction",
+                        Location::None,
+                        format!("`{d}`: expected X,Y,Z"),
+                    )
+                })?;
+            if v.len() != 3 {
+                return Err(Error::input(
+                    "--direction",
+                    Location::None,
+                    format!("`{d}`: expected X,Y,Z"),
+                ));
+            }
+            extrude::Direction::Fixed([v[0], v[1], v[2]])
+        }
+    };
+    let mesh = extrude::extrude_with(&s, &|g| t[g], dir, &file)?;
+    mesh.validate(&file)?;
+    let groups: Vec<(String, Vec<u32>)> = s
+        .groups
+        .iter()
+        .map(|g| {
+            (
+                g.clone(),
+                mesh.element_sets.get(g).cloned().unwrap_or_default(),
+            )
+        })
+        .collect();
+    write_mesh_outputs(out, &mesh, &groups)?;
+    println!(
+        "{}: {} quads in {} groups -> {} hexahedra, {} nodes; wrote mesh.vtu and model.xml to {}",
+        file,
+        s.quads.len(),
+        s.groups.len(),
+        mesh.elements.len(),
+        mesh.nodes.len(),
         out.display()
     );
     Ok(())

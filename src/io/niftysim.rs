@@ -516,3 +516,64 @@ pub fn parse(
     };
     Ok(problem)
 }
+
+/// One element set of a model written by [`write_model`]: its elements and neo-Hookean
+/// material.
+pub struct SetMaterial<'a> {
+    pub elements: &'a [u32],
+    pub mu: f64,
+    pub bulk: f64,
+    pub density: f64,
+}
+
+/// Writes a mesh as a NiftySim XML model (nodes, H8 elements, one `<ElementSet>` per
+/// material set, `<SystemParams>`), atomically: the format the paper's pipeline produced
+/// from its extruded OBJ. Constraints are left to the scenario that uses it.
+pub fn write_model(
+    path: &Path,
+    mesh: &Mesh,
+    sets: &[SetMaterial],
+    dt: f64,
+    total_time: f64,
+    damping: f64,
+    kappa: f64,
+) -> Result<()> {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let _ = writeln!(s, "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<Model>");
+    let _ = writeln!(s, "   <Nodes DOF=\"3\" NumNodes=\"{}\">", mesh.nodes.len());
+    for x in &mesh.nodes {
+        let _ = writeln!(s, "      {:?} {:?} {:?}", x[0], x[1], x[2]);
+    }
+    let _ = writeln!(
+        s,
+        "   </Nodes>\n   <Elements NumEls=\"{}\" Type=\"H8\">",
+        mesh.elements.len()
+    );
+    for c in &mesh.elements {
+        let _ = writeln!(
+            s,
+            "      {} {} {} {} {} {} {} {}",
+            c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]
+        );
+    }
+    let _ = writeln!(s, "   </Elements>");
+    for set in sets {
+        let _ = writeln!(s, "   <ElementSet Size=\"{}\">", set.elements.len());
+        let _ = writeln!(
+            s,
+            "      <Material Type=\"NH\">\n         <ElasticParams NumParams=\"2\">\n            {:?} {:?}\n         </ElasticParams>\n         <Density>{:?}</Density>\n      </Material>",
+            set.mu, set.bulk, set.density
+        );
+        for chunk in set.elements.chunks(16) {
+            let line: Vec<String> = chunk.iter().map(|e| e.to_string()).collect();
+            let _ = writeln!(s, "      {}", line.join(" "));
+        }
+        let _ = writeln!(s, "   </ElementSet>");
+    }
+    let _ = writeln!(
+        s,
+        "   <SystemParams>\n      <TimeStep>{dt:?}</TimeStep>\n      <TotalTime>{total_time:?}</TotalTime>\n      <DampingCoeff>{damping:?}</DampingCoeff>\n      <HGKappa>{kappa:?}</HGKappa>\n   </SystemParams>\n</Model>"
+    );
+    crate::io::atomic::write_atomic(path, s.as_bytes()).map_err(|e| Error::io(path, e))
+}

@@ -41,6 +41,12 @@ pub struct ScenarioFile {
     pub saliva: Vec<SalivaDef>,
     #[serde(default)]
     pub muscle: Vec<MuscleDef>,
+    /// The jaw opening (mouth generator only): rotation of the `jaw` node set about the
+    /// model's hinge.
+    pub jaw: Option<JawDef>,
+    /// Muscles of the mouth model, by name (mouth generator only).
+    #[serde(default)]
+    pub model_muscle: Vec<ModelMuscleDef>,
     pub time: TimeDef,
     #[serde(default)]
     pub numerics: NumericsDef,
@@ -70,6 +76,30 @@ pub struct MeshSection {
     pub file: Option<PathBuf>,
     /// Layers stacked along z, bottom first (`layers`): `{ name, thickness, cells }`.
     pub layers: Option<Vec<generate::Layer>>,
+    /// Parameters of the procedural mouth (`mouth`); every field has a default (SI units,
+    /// not affected by `[units]`).
+    pub mouth: Option<crate::mesh::mouth::MouthParams>,
+}
+
+/// `[jaw]`: the angle (rad, positive opens) and its curve.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct JawDef {
+    pub angle: f64,
+    #[serde(flatten)]
+    pub curve: CurveDef,
+}
+
+/// `[[model_muscle]]`: one of the mouth model's muscles (e.g.
+/// `depressor_labii_inferioris_l`), with its strength (N) and activation curve.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct ModelMuscleDef {
+    pub name: String,
+    pub strength: f64,
+    pub activation: Option<f64>,
+    #[serde(flatten)]
+    pub curve: CurveDef,
 }
 
 #[derive(Deserialize, Debug)]
@@ -338,6 +368,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
     let need = |v: Option<[f64; 3]>, k: &str| {
         v.ok_or_else(|| Error::field(f, format!("mesh.{k}"), "required by this generator"))
     };
+    let mut mouth: Option<crate::mesh::mouth::MouthModel> = None;
     let mut mesh: Mesh = match m.generator.as_str() {
         "block" | "distorted_block" => {
             let cells = m
@@ -405,6 +436,13 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
                 &scaled,
             )
         }
+        "mouth" => {
+            let params = m.mouth.clone().unwrap_or_default();
+            let model = crate::mesh::mouth::generate(&params)?;
+            let mesh = model.mesh.clone();
+            mouth = Some(model);
+            mesh
+        }
         "niftysim" => {
             let rel = m.file.as_ref().ok_or_else(|| {
                 Error::field(f, "mesh.file", "required by the niftysim generator")
@@ -427,7 +465,9 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
             return Err(Error::field(
                 f,
                 "mesh.generator",
-                format!("unknown generator `{o}` (block, distorted_block, layers, niftysim)"),
+                format!(
+                    "unknown generator `{o}` (block, distorted_block, layers, mouth, niftysim)"
+                ),
             ))
         }
     };
@@ -638,6 +678,13 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
             curve: curve(&d.curve, &field, LoadShape::Step)?,
         });
     }
+    if let Some(j) = &sf.jaw {
+        let model = mouth
+            .as_ref()
+            .ok_or_else(|| Error::field(f, "jaw", "[jaw] needs the mouth generator"))?;
+        bc.rotations
+            .push(model.jaw_rotation(j.angle, curve(&j.curve, "jaw", LoadShape::SmoothStep)?));
+    }
     if let Some(g) = &sf.gravity {
         bc.gravity.push(Gravity {
             nodes: None,
@@ -646,7 +693,49 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
         });
     }
 
-    let physics = read_physics(&sf, f, base, scale, &materials, &curve)?;
+    let mut physics = read_physics(&sf, f, base, scale, &materials, &curve)?;
+    if let Some(model) = &mouth {
+        for (i, mm) in sf.model_muscle.iter().enumerate() {
+            let field = format!("model_muscle[{i}]");
+            let mut m = model
+                .muscles
+                .iter()
+                .find(|m| m.name == mm.name)
+                .cloned()
+                .ok_or_else(|| {
+                    let names: Vec<&str> = model.muscles.iter().map(|m| m.name.as_str()).collect();
+                    Error::field(
+                        f,
+                        format!("{field}.name"),
+                        format!(
+                            "no muscle `{}` in the mouth model (it has {names:?})",
+                            mm.name
+                        ),
+                    )
+                })?;
+            m.strength = mm.strength;
+            m.activation = mm.activation.unwrap_or(1.0);
+            m.curve = curve(&mm.curve, &field, LoadShape::SmoothStep)?;
+            physics.muscles.push(m);
+        }
+        for s in physics.saliva.iter_mut() {
+            if s.params.across.is_none() {
+                s.params.across = Some(model.saliva_across);
+            }
+        }
+        physics.lip_columns = Some(crate::measures::LipColumns {
+            x: model.saliva_columns.iter().map(|c| c.0).collect(),
+            upper: model.saliva_columns.iter().map(|c| c.1).collect(),
+            lower: model.saliva_columns.iter().map(|c| c.2).collect(),
+            center: 0.0,
+        });
+    } else if !sf.model_muscle.is_empty() {
+        return Err(Error::field(
+            f,
+            "model_muscle",
+            "[[model_muscle]] needs the mouth generator",
+        ));
+    }
     let nd = &sf.numerics;
     let problem = Problem {
         source: file.clone(),

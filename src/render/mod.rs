@@ -1,0 +1,358 @@
+//! Figure rendering on the CPU: shaded renderings of a hexahedral mesh's boundary,
+//! panels composed into figures with text labels, line plots and gap profiles, and PNG
+//! encoding.
+//!
+//! The library computes pixels and never writes a figure by itself ("src computes"): the
+//! functions here return [`Image`]s; the `sticky-lips` command calls [`save_png`] to write
+//! them (atomically).
+//!
+//! - [`raster`]: [`Image`], [`Camera`] (perspective or orthographic, [`Camera::fit`]),
+//!   [`rasterize`] (z-buffer, Lambert shading, textures, supersampling).
+//! - [`surface`]: [`boundary_quads`] of a hexahedral mesh and normals.
+//! - [`plot`]: [`plot::line_plot`], [`plot::profile_plot`], [`plot::heatmap_plot`].
+//! - text: [`Image::label`], [`text_size`] with the embedded DejaVu Sans font.
+//!
+//! A rendering of the current configuration of a mesh:
+//!
+//! ```
+//! use sticky_lips::render::*;
+//! let mesh = sticky_lips::mesh::generate::block([0.0; 3], [2.0, 1.0, 1.0], [4, 2, 2]);
+//! let faces = boundary_quads(&mesh.elements);
+//! let camera = Camera::fit(&mesh.nodes, [-0.3, -1.0, -0.4], [0.0, 0.0, 1.0], 30.0,
+//!                          Projection::Perspective, 4.0 / 3.0, 0.05);
+//! let img = render_mesh(&mesh.nodes, &faces, &|f| if f.element % 2 == 0 { [200, 80, 80] }
+//!                       else { [230, 200, 180] }, None, &camera, 320, 240);
+//! assert_eq!((img.width, img.height), (320, 240));
+//! let png_bytes = encode_png(&img);
+//! # assert!(png_bytes.len() > 100);
+//! ```
+
+pub mod plot;
+pub mod raster;
+pub mod surface;
+mod text;
+
+pub use raster::{
+    rasterize, Camera, CameraFrame, Image, Light, Projection, RenderOptions, Shading, Triangle,
+    Wireframe, BLACK, WHITE,
+};
+pub use surface::{
+    boundary_quads, boundary_quads_where, corner_normals, face_centroid, face_normal,
+    vertex_normals, BoundaryFace, HEX_FACES,
+};
+pub use text::{text_size, FONT_BYTES};
+
+use crate::error::{Error, Location, Result};
+use raster::{norm, sub};
+use std::path::Path;
+
+/// Normals of faces meeting at less than this angle are averaged for smooth shading;
+/// sharper edges stay sharp.
+pub const DEFAULT_CREASE_DEGREES: f64 = 60.0;
+
+/// Triangles for the boundary `faces` at the current `positions`: each quad split along
+/// its shorter diagonal, coloured by `face_colour`, with crease-aware corner normals
+/// ([`corner_normals`]), per-node texture coordinates `uv` (if given), and the quad edges
+/// (not the diagonal) flagged for the wireframe option.
+pub fn mesh_triangles(
+    positions: &[[f64; 3]],
+    faces: &[BoundaryFace],
+    face_colour: &dyn Fn(&BoundaryFace) -> [u8; 3],
+    uv: Option<&[[f64; 2]]>,
+    crease_degrees: f64,
+) -> Vec<Triangle> {
+    let normals = corner_normals(positions, faces, crease_degrees);
+    let mut out = Vec::with_capacity(2 * faces.len());
+    for (f, n) in faces.iter().zip(&normals) {
+        let p = |i: usize| positions[f.nodes[i] as usize];
+        let colour = face_colour(f);
+        // Corner triples and edge masks (bit i: edge from corner i to corner i+1).
+        let split: [([usize; 3], u8); 2] = if norm(sub(p(2), p(0))) <= norm(sub(p(3), p(1))) {
+            [([0, 1, 2], 0b011), ([0, 2, 3], 0b110)]
+        } else {
+            [([0, 1, 3], 0b101), ([1, 2, 3], 0b011)]
+        };
+        for (c, edges) in split {
+            out.push(Triangle {
+                positions: c.map(p),
+                normals: c.map(|i| n[i]),
+                uv: uv.map(|uv| c.map(|i| uv[f.nodes[i] as usize])),
+                colour,
+                edges,
+            });
+        }
+    }
+    out
+}
+
+/// Renders the boundary `faces` of a mesh at the current `positions` with the default
+/// options ([`RenderOptions::new`]: two lights, smooth shading, 3x supersampling, white
+/// background). `uv`: texture coordinates per node and the texture, which then replaces
+/// the face colours.
+pub fn render_mesh(
+    positions: &[[f64; 3]],
+    faces: &[BoundaryFace],
+    face_colour: &dyn Fn(&BoundaryFace) -> [u8; 3],
+    uv: Option<(&[[f64; 2]], &Image)>,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+) -> Image {
+    render_mesh_with(
+        positions,
+        faces,
+        face_colour,
+        uv,
+        camera,
+        &RenderOptions::new(width, height),
+    )
+}
+
+/// [`render_mesh`] with explicit options (size, lights, shading, wireframe, ...).
+pub fn render_mesh_with(
+    positions: &[[f64; 3]],
+    faces: &[BoundaryFace],
+    face_colour: &dyn Fn(&BoundaryFace) -> [u8; 3],
+    uv: Option<(&[[f64; 2]], &Image)>,
+    camera: &Camera,
+    options: &RenderOptions,
+) -> Image {
+    let tris = mesh_triangles(
+        positions,
+        faces,
+        face_colour,
+        uv.map(|(u, _)| u),
+        DEFAULT_CREASE_DEGREES,
+    );
+    rasterize(&tris, uv.map(|(_, t)| t), camera, options)
+}
+
+/// Titles around a grid of panels (see [`Image::grid_labelled`]).
+#[derive(Clone, Debug)]
+pub struct GridLabels<'a> {
+    /// Centred above everything.
+    pub title: Option<&'a str>,
+    /// Centred above each column (missing entries: none).
+    pub column_titles: &'a [&'a str],
+    /// Left of each row, vertically centred (missing entries: none).
+    pub row_titles: &'a [&'a str],
+    pub text_size: f64,
+    pub text_colour: [u8; 3],
+}
+
+impl Default for GridLabels<'_> {
+    fn default() -> Self {
+        GridLabels {
+            title: None,
+            column_titles: &[],
+            row_titles: &[],
+            text_size: 20.0,
+            text_colour: BLACK,
+        }
+    }
+}
+
+impl Image {
+    /// Panels laid out row by row in `cols` columns, each centred in a cell the size of
+    /// the largest panel, `spacing` pixels between cells and around the border.
+    pub fn grid(images: &[Image], cols: usize, spacing: u32, background: [u8; 3]) -> Image {
+        Image::grid_labelled(images, cols, spacing, background, &GridLabels::default())
+    }
+
+    /// [`Image::grid`] with a title, column titles and row titles (e.g. Fig. 4: columns
+    /// "without stickiness" / "with stickiness", rows "t = 0.04 s", ...).
+    pub fn grid_labelled(
+        images: &[Image],
+        cols: usize,
+        spacing: u32,
+        background: [u8; 3],
+        labels: &GridLabels,
+    ) -> Image {
+        let cols = cols.max(1);
+        let rows = images.len().div_ceil(cols).max(1);
+        let cw = images.iter().map(|i| i.width).max().unwrap_or(0);
+        let ch = images.iter().map(|i| i.height).max().unwrap_or(0);
+        let ts = labels.text_size;
+        let nonempty = |v: &[&str]| v.iter().any(|s| !s.is_empty());
+        let title_h = match labels.title {
+            Some(t) if !t.is_empty() => text_size(t, ts * 1.15).1 + spacing,
+            _ => 0,
+        };
+        let col_h = if nonempty(labels.column_titles) {
+            labels
+                .column_titles
+                .iter()
+                .map(|t| text_size(t, ts).1)
+                .max()
+                .unwrap_or(0)
+                + spacing / 2
+        } else {
+            0
+        };
+        let row_w = if nonempty(labels.row_titles) {
+            labels
+                .row_titles
+                .iter()
+                .map(|t| text_size(t, ts).0)
+                .max()
+                .unwrap_or(0)
+                + spacing
+        } else {
+            0
+        };
+        let width = 2 * spacing + row_w + cols as u32 * cw + (cols as u32 - 1) * spacing;
+        let height = 2 * spacing + title_h + col_h + rows as u32 * ch + (rows as u32 - 1) * spacing;
+        let mut out = Image::new(width, height, background);
+        let x_of = |c: usize| (spacing + row_w + c as u32 * (cw + spacing)) as i64;
+        let y_of = |r: usize| (spacing + title_h + col_h + r as u32 * (ch + spacing)) as i64;
+        if let Some(t) = labels.title {
+            out.label_centred(
+                t,
+                width as i64 / 2,
+                spacing as i64,
+                ts * 1.15,
+                labels.text_colour,
+            );
+        }
+        for (c, t) in labels.column_titles.iter().enumerate().take(cols) {
+            out.label_centred(
+                t,
+                x_of(c) + cw as i64 / 2,
+                (spacing + title_h) as i64,
+                ts,
+                labels.text_colour,
+            );
+        }
+        for (r, t) in labels.row_titles.iter().enumerate().take(rows) {
+            let th = text_size(t, ts).1 as i64;
+            out.label(
+                t,
+                spacing as i64,
+                y_of(r) + (ch as i64 - th) / 2,
+                ts,
+                labels.text_colour,
+            );
+        }
+        for (i, img) in images.iter().enumerate() {
+            let (r, c) = (i / cols, i % cols);
+            let x = x_of(c) + (cw - img.width) as i64 / 2;
+            let y = y_of(r) + (ch - img.height) as i64 / 2;
+            out.blit(img, x, y);
+        }
+        out
+    }
+
+    /// A legend: one colour swatch and name per line (e.g. the materials of Fig. 2).
+    pub fn legend(entries: &[(&str, [u8; 3])], text_size_px: f64, background: [u8; 3]) -> Image {
+        let line = text_size("Hg", text_size_px).1.max(1);
+        let sw = line * 3 / 4;
+        let pad = line / 2;
+        let tw = entries
+            .iter()
+            .map(|(t, _)| text_size(t, text_size_px).0)
+            .max()
+            .unwrap_or(0);
+        let n = entries.len() as u32;
+        let mut out = Image::new(
+            2 * pad + sw + pad + tw,
+            2 * pad + n * line + n.saturating_sub(1) * pad / 2,
+            background,
+        );
+        for (i, (t, c)) in entries.iter().enumerate() {
+            let y = (pad + i as u32 * (line + pad / 2)) as i64;
+            let sy = y + (line - sw) as i64 / 2;
+            out.fill_rect(pad as i64, sy, sw, sw, BLACK);
+            out.fill_rect(
+                pad as i64 + 1,
+                sy + 1,
+                sw.saturating_sub(2),
+                sw.saturating_sub(2),
+                *c,
+            );
+            out.label(t, (pad + sw + pad) as i64, y, text_size_px, BLACK);
+        }
+        out
+    }
+}
+
+/// The image as an 8-bit RGB PNG. Panics if the image is empty or `rgb` has the wrong length.
+pub fn encode_png(image: &Image) -> Vec<u8> {
+    assert!(
+        image.width > 0 && image.height > 0,
+        "encode_png: empty image ({} x {})",
+        image.width,
+        image.height
+    );
+    assert_eq!(
+        image.rgb.len(),
+        3 * image.width as usize * image.height as usize,
+        "encode_png: buffer length does not match the size"
+    );
+    let mut out = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut out, image.width, image.height);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut w = enc.write_header().expect("PNG header into memory");
+        w.write_image_data(&image.rgb)
+            .expect("PNG data into memory");
+        w.finish().expect("PNG end into memory");
+    }
+    out
+}
+
+/// Decodes a PNG (any colour type and bit depth; alpha is dropped, grey expanded) to RGB.
+pub fn decode_png(bytes: &[u8]) -> std::result::Result<Image, String> {
+    let mut dec = png::Decoder::new(std::io::Cursor::new(bytes));
+    dec.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+    let mut reader = dec.read_info().map_err(|e| e.to_string())?;
+    let size = reader
+        .output_buffer_size()
+        .ok_or_else(|| "PNG too large".to_string())?;
+    let mut buf = vec![0u8; size];
+    let info = reader.next_frame(&mut buf).map_err(|e| e.to_string())?;
+    let (w, h) = (info.width, info.height);
+    let channels = match info.color_type {
+        png::ColorType::Grayscale => 1,
+        png::ColorType::GrayscaleAlpha => 2,
+        png::ColorType::Rgb => 3,
+        png::ColorType::Rgba => 4,
+        png::ColorType::Indexed => return Err("indexed PNG was not expanded".into()),
+    };
+    let mut rgb = Vec::with_capacity(3 * w as usize * h as usize);
+    for y in 0..h as usize {
+        let row = &buf[y * info.line_size..y * info.line_size + channels * w as usize];
+        for px in row.chunks_exact(channels) {
+            match channels {
+                1 | 2 => rgb.extend_from_slice(&[px[0]; 3]),
+                _ => rgb.extend_from_slice(&px[..3]),
+            }
+        }
+    }
+    Ok(Image {
+        width: w,
+        height: h,
+        rgb,
+    })
+}
+
+/// Reads a PNG file (e.g. a texture) as RGB.
+pub fn load_png(path: &Path) -> Result<Image> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    decode_png(&bytes).map_err(|m| Error::input(path.display().to_string(), Location::None, m))
+}
+
+/// Writes the image as a PNG file, atomically (a reader never sees a partial file).
+pub fn save_png(path: &Path, image: &Image) -> Result<()> {
+    if image.width == 0 || image.height == 0 {
+        return Err(Error::input(
+            path.display().to_string(),
+            Location::None,
+            "cannot write an empty image",
+        ));
+    }
+    crate::io::atomic::write_atomic(path, &encode_png(image)).map_err(|e| Error::io(path, e))
+}
+
+#[cfg(test)]
+mod tests;
