@@ -73,8 +73,9 @@ pub fn open_fraction(cols: &LipColumns, gap: &[f64], threshold: f64) -> f64 {
     open / width
 }
 
-/// Left/right asymmetry of the opening: `(mean gap right - mean gap left) / (mean gap)`,
-/// sides split at `cols.center` (0 for a symmetric opening; 0 when the mouth is closed).
+/// Left/right asymmetry of the opening: `(mean gap at x > center - mean gap at x < center) /
+/// mean gap`. In the mouth model `+x` is the subject's left, so a positive value means the
+/// mouth is open wider on the subject's left. 0 for a symmetric opening and for a closed mouth.
 pub fn asymmetry(cols: &LipColumns, gap: &[f64]) -> f64 {
     let (mut l, mut nl, mut r, mut nr) = (0.0, 0, 0.0, 0);
     for (x, g) in cols.x.iter().zip(gap) {

@@ -334,6 +334,60 @@ pub fn read(path: &Path) -> Result<Scenario> {
     parse(&text, path)
 }
 
+/// Reads a scenario with some values replaced first: each override is a dotted key path
+/// (`"mesh.mouth.resolution"`, `"time.total"`) and its new value; missing tables are
+/// created. Used for the coarse (`--quick`) versions of the paper's scenarios and for sweeps.
+pub fn read_with_overrides(path: &Path, overrides: &[(&str, toml::Value)]) -> Result<Scenario> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    if overrides.is_empty() {
+        return parse(&text, path);
+    }
+    let file = path.display().to_string();
+    let doc: toml::Table = toml::from_str(&text)
+        .map_err(|e| Error::input(&file, line_of(&text, e.span()), e.message()))?;
+    let mut doc = toml::Value::Table(doc);
+    for (key, value) in overrides {
+        let parts: Vec<&str> = key.split('.').collect();
+        let mut cur = &mut doc;
+        for (i, p) in parts.iter().enumerate() {
+            let last = i + 1 == parts.len();
+            cur = match cur {
+                toml::Value::Table(t) => {
+                    if last {
+                        t.insert(p.to_string(), value.clone());
+                        break;
+                    }
+                    t.entry(p.to_string())
+                        .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+                }
+                toml::Value::Array(a) => {
+                    let k: usize = p.parse().map_err(|_| {
+                        Error::field(&file, key.to_string(), "expected an array index")
+                    })?;
+                    let n = a.len();
+                    let slot = a.get_mut(k).ok_or_else(|| {
+                        Error::field(&file, key.to_string(), format!("index {k} out of {n}"))
+                    })?;
+                    if last {
+                        *slot = value.clone();
+                        break;
+                    }
+                    slot
+                }
+                _ => {
+                    return Err(Error::field(
+                        &file,
+                        key.to_string(),
+                        "override path crosses a plain value",
+                    ))
+                }
+            };
+        }
+    }
+    let text = toml::to_string(&doc).expect("a TOML table serialises");
+    parse(&text, path)
+}
+
 fn line_of(text: &str, span: Option<std::ops::Range<usize>>) -> Location {
     match span {
         Some(r) => Location::Line(text[..r.start.min(text.len())].matches('\n').count() + 1),
