@@ -523,6 +523,20 @@ pub fn read_point_data_f64(
     path: &Path,
     name: &str,
 ) -> crate::error::Result<(Vec<f64>, usize, usize)> {
+    read_array(path, "PointData", name)
+}
+
+/// Reads a cell-data array (Float64 or Int32, converted to `f64`) of one of our own `.vtu`
+/// files: `(values, components, cells)`.
+pub fn read_cell_data(path: &Path, name: &str) -> crate::error::Result<(Vec<f64>, usize, usize)> {
+    read_array(path, "CellData", name)
+}
+
+fn read_array(
+    path: &Path,
+    section: &str,
+    name: &str,
+) -> crate::error::Result<(Vec<f64>, usize, usize)> {
     use crate::error::{Error, Location};
     let file = path.display().to_string();
     let bad = |m: String| Error::input(file.clone(), Location::None, m);
@@ -532,23 +546,34 @@ pub fn read_point_data_f64(
         .descendants()
         .find(|n| n.has_tag_name("Piece"))
         .ok_or_else(|| bad("no <Piece>".into()))?;
-    let points: usize = piece
-        .attribute("NumberOfPoints")
+    let count_attr = if section == "PointData" {
+        "NumberOfPoints"
+    } else {
+        "NumberOfCells"
+    };
+    let count: usize = piece
+        .attribute(count_attr)
         .and_then(|v| v.parse().ok())
-        .ok_or_else(|| bad("<Piece> lacks NumberOfPoints".into()))?;
+        .ok_or_else(|| bad(format!("<Piece> lacks {count_attr}")))?;
     let arr = piece
         .descendants()
-        .filter(|n| n.has_tag_name("PointData"))
+        .filter(|n| n.has_tag_name(section))
         .flat_map(|pd| pd.children())
         .find(|n| n.has_tag_name("DataArray") && n.attribute("Name") == Some(name))
-        .ok_or_else(|| bad(format!("no point-data array `{name}`")))?;
+        .ok_or_else(|| bad(format!("no {section} array `{name}`")))?;
     let comps: usize = arr
         .attribute("NumberOfComponents")
         .and_then(|v| v.parse().ok())
         .unwrap_or(1);
-    if arr.attribute("type") != Some("Float64") {
-        return Err(bad(format!("array `{name}` is not Float64")));
-    }
+    let width = match arr.attribute("type") {
+        Some("Float64") => 8,
+        Some("Int32") => 4,
+        other => {
+            return Err(bad(format!(
+                "array `{name}` has type {other:?} (Float64 or Int32 expected)"
+            )))
+        }
+    };
     let body = arr.text().unwrap_or("");
     let values: Vec<f64> = match arr.attribute("format") {
         Some("binary") => {
@@ -558,15 +583,22 @@ pub fn read_point_data_f64(
                 return Err(bad(format!("array `{name}`: truncated")));
             }
             let n = u64::from_le_bytes(raw[..8].try_into().unwrap()) as usize;
-            if raw.len() != 8 + n || n % 8 != 0 {
+            if raw.len() != 8 + n || n % width != 0 {
                 return Err(bad(format!(
                     "array `{name}`: byte count {n} does not match the data"
                 )));
             }
-            raw[8..]
-                .chunks_exact(8)
-                .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
-                .collect()
+            if width == 8 {
+                raw[8..]
+                    .chunks_exact(8)
+                    .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+                    .collect()
+            } else {
+                raw[8..]
+                    .chunks_exact(4)
+                    .map(|c| i32::from_le_bytes(c.try_into().unwrap()) as f64)
+                    .collect()
+            }
         }
         Some("ascii") => body
             .split_whitespace()
@@ -581,13 +613,13 @@ pub fn read_point_data_f64(
             )))
         }
     };
-    if values.len() != comps * points {
+    if values.len() != comps * count {
         return Err(bad(format!(
-            "array `{name}` has {} values for {points} points x {comps}",
+            "array `{name}` has {} values for {count} x {comps}",
             values.len()
         )));
     }
-    Ok((values, comps, points))
+    Ok((values, comps, count))
 }
 
 #[cfg(test)]

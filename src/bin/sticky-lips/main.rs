@@ -153,7 +153,7 @@ enum Command {
         /// The scenario files.
         #[arg(long, default_value = "paper/scenarios")]
         scenarios: PathBuf,
-        /// A coarse, short version (for CI): about 550 hexahedra, 0.7 s simulated.
+        /// A coarse, short version (for CI): about 600 hexahedra, 0.7 s simulated.
         #[arg(long)]
         quick: bool,
         #[arg(long, default_value_t = 2)]

@@ -68,6 +68,27 @@ impl Run {
         let (v, _, _) = read_point_data_f64(&path, "displacement")?;
         Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
     }
+    /// Which elements are broken saliva elements at output frame `frame` (hidden in renderings).
+    fn broken(&self, frame: usize) -> Result<Vec<bool>> {
+        let path = self.dir.join(format!("frame_{frame:06}.vtu"));
+        if self.problem.physics.saliva.is_empty() {
+            return Ok(Vec::new());
+        }
+        let (v, _, _) = sticky_lips::io::vtu::read_cell_data(&path, "saliva_broken")?;
+        Ok(v.iter().map(|b| *b > 0.5).collect())
+    }
+    /// A rendering of output frame `frame` (broken saliva hidden).
+    fn picture(&self, frame: usize, w: u32, h: u32) -> Result<Image> {
+        Ok(render_hiding(
+            &self.problem,
+            &self.displacement(frame)?,
+            &self.broken(frame)?,
+            &skin_colours,
+            CAVITY,
+            w,
+            h,
+        ))
+    }
     fn series(&self, key: &str) -> Vec<(f64, f64)> {
         self.frames()
             .iter()
@@ -102,8 +123,8 @@ impl Run {
 
 fn quick_overrides() -> Vec<(&'static str, toml::Value)> {
     vec![
-        // a coarse mouth (about 550 hexahedra) and a shorter run: minutes become seconds
-        ("mesh.mouth.resolution", toml::Value::Float(0.4)),
+        // a coarse mouth (about 600 hexahedra) and a shorter run: minutes become seconds
+        ("mesh.mouth.resolution", toml::Value::Float(0.25)),
         ("time.total", toml::Value::Float(0.7)),
     ]
 }
@@ -189,9 +210,35 @@ fn mouth_camera(p: &Problem, aspect: f64) -> Camera {
     )
 }
 
+/// The boundary faces of the elements that are drawn: all but the `hidden` ones (broken
+/// saliva elements, which no longer join the lips), with `element` indices of the full mesh.
+fn visible_faces(p: &Problem, hidden: &[bool]) -> Vec<sticky_lips::render::BoundaryFace> {
+    let keep: Vec<u32> = (0..p.mesh.elements.len() as u32)
+        .filter(|&e| !hidden.get(e as usize).copied().unwrap_or(false))
+        .collect();
+    let els: Vec<[u32; 8]> = keep.iter().map(|&e| p.mesh.elements[e as usize]).collect();
+    let mut faces = boundary_quads(&els);
+    for f in faces.iter_mut() {
+        f.element = keep[f.element as usize];
+    }
+    faces
+}
+
 fn render(
     p: &Problem,
     u: &[[f64; 3]],
+    colours: &dyn Fn(u8) -> [u8; 3],
+    background: [u8; 3],
+    w: u32,
+    h: u32,
+) -> Image {
+    render_hiding(p, u, &[], colours, background, w, h)
+}
+
+fn render_hiding(
+    p: &Problem,
+    u: &[[f64; 3]],
+    hidden: &[bool],
     colours: &dyn Fn(u8) -> [u8; 3],
     background: [u8; 3],
     w: u32,
@@ -204,7 +251,7 @@ fn render(
         .zip(u)
         .map(|(a, b)| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
         .collect();
-    let faces = boundary_quads(&p.mesh.elements);
+    let faces = visible_faces(p, hidden);
     let codes = element_codes(p);
     let cam = mouth_camera(p, w as f64 / h as f64);
     let mut o = RenderOptions::new(w, h);
@@ -331,11 +378,14 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
         .first_opening()
         .map(|o| o.0)
         .unwrap_or(dry.times().last().copied().unwrap_or(0.0));
-    let t0 = ((t_dry - 0.04).max(0.0) / 0.01).round() * 0.01;
+    // rows 0.04 s apart from just before the dry lips part to just after the sticky ones have
+    // unzipped (at most 10 rows: the start moves later if needed)
     let t_end_run = dry.times().last().copied().unwrap_or(0.0);
+    let t_last = (t_sticky + 0.12).min(t_end_run);
+    let t0 = (((t_dry - 0.04).max(0.0)).max(t_last - 9.0 * 0.04) / 0.01).round() * 0.01;
     let mut rows = Vec::new();
     let mut t = t0;
-    while rows.len() < 9 && t <= t_end_run + 1e-9 && (rows.len() < 4 || t <= t_sticky + 0.09) {
+    while rows.len() < 10 && t <= t_last + 1e-9 {
         rows.push(t);
         t += 0.04;
     }
@@ -344,14 +394,7 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
     for &t in &rows {
         for run in [&dry, &sticky] {
             let f = run.frame_at(t);
-            panels.push(render(
-                &run.problem,
-                &run.displacement(f)?,
-                &skin_colours,
-                CAVITY,
-                420,
-                260,
-            ));
+            panels.push(run.picture(f, 420, 260)?);
         }
         row_titles.push(format!("t = {t:.2} s"));
     }
@@ -371,14 +414,7 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
 
     // ---- Fig. 1: sticky lips while opening (shortly after the first opening)
     let f1 = sticky.frame_at(t_sticky + 0.02);
-    let fig1 = render(
-        &sticky.problem,
-        &sticky.displacement(f1)?,
-        &skin_colours,
-        CAVITY,
-        900,
-        560,
-    );
+    let fig1 = sticky.picture(f1, 900, 560)?;
     save(out, "fig1_sticky_opening.png", &fig1, &mut written)?;
 
     // ---- Figs. 5-7: slight opening at equilibrium: blend shapes, without, with stickiness
@@ -405,25 +441,24 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
         .clone()
         .expect("mouth model");
     let gap_blend = sticky_lips::measures::lip_gap(&small_dry.problem.mesh.nodes, &u_blend, &cols);
-    let fig6 = render(&small_dry.problem, &u_blend, &skin_colours, CAVITY, w, h);
+    // the blend has no saliva state: like the dry run, its saliva strip holds nothing
+    let all_saliva: Vec<bool> = element_codes(&small_dry.problem)
+        .iter()
+        .map(|&c| c == 2)
+        .collect();
+    let fig6 = render_hiding(
+        &small_dry.problem,
+        &u_blend,
+        &all_saliva,
+        &skin_colours,
+        CAVITY,
+        w,
+        h,
+    );
     save(out, "fig6_blend_baseline.png", &fig6, &mut written)?;
     let fig6b = fig6.clone();
-    let p_dry = render(
-        &small_dry.problem,
-        &small_dry.displacement(small_dry.last())?,
-        &skin_colours,
-        CAVITY,
-        w,
-        h,
-    );
-    let p_sticky = render(
-        &small_sticky.problem,
-        &small_sticky.displacement(small_sticky.last())?,
-        &skin_colours,
-        CAVITY,
-        w,
-        h,
-    );
+    let p_dry = small_dry.picture(small_dry.last(), w, h)?;
+    let p_sticky = small_sticky.picture(small_sticky.last(), w, h)?;
     let labels = GridLabels {
         title: Some("Figs. 5-7: a slight opening at equilibrium"),
         column_titles: &[
@@ -465,22 +500,8 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
     )?;
 
     // ---- Fig. 8: wide opening, both at equilibrium
-    let q_dry = render(
-        &dry.problem,
-        &dry.displacement(dry.last())?,
-        &skin_colours,
-        CAVITY,
-        w,
-        h,
-    );
-    let q_sticky = render(
-        &sticky.problem,
-        &sticky.displacement(sticky.last())?,
-        &skin_colours,
-        CAVITY,
-        w,
-        h,
-    );
+    let q_dry = dry.picture(dry.last(), w, h)?;
+    let q_sticky = sticky.picture(sticky.last(), w, h)?;
     let labels = GridLabels {
         title: Some("Fig. 8: a wide opening at equilibrium"),
         column_titles: &["without stickiness", "with stickiness"],
@@ -529,7 +550,7 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
         .zip(&u9)
         .map(|(a, b)| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
         .collect();
-    let faces = boundary_quads(&bands.problem.mesh.elements);
+    let faces = visible_faces(&bands.problem, &bands.broken(bands.last())?);
     let mut o = RenderOptions::new(900, 560);
     o.background = CAVITY;
     let cam = mouth_camera(&bands.problem, 900.0 / 560.0);
@@ -558,14 +579,7 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
     )?;
 
     // ---- Fig. 10: asymmetric opening
-    let fig10 = render(
-        &asym.problem,
-        &asym.displacement(asym.last())?,
-        &skin_colours,
-        CAVITY,
-        900,
-        560,
-    );
+    let fig10 = asym.picture(asym.last(), 900, 560)?;
     save(out, "fig10_asymmetric.png", &fig10, &mut written)?;
 
     // ---- Fig. 11: texture-mapped
@@ -584,7 +598,7 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
             })?
             .unwrap_or_default();
         if opts.quick {
-            mp.resolution = 0.4;
+            mp.resolution = 0.25;
         }
         mp
     };
@@ -612,7 +626,7 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
         .zip(&u11)
         .map(|(a, b)| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
         .collect();
-    let faces = boundary_quads(&sticky.problem.mesh.elements);
+    let faces = visible_faces(&sticky.problem, &sticky.broken(f11)?);
     let mut o = RenderOptions::new(900, 560);
     o.background = CAVITY;
     let cam = mouth_camera(&sticky.problem, 900.0 / 560.0);
