@@ -56,4 +56,14 @@ SHARED="${STICKY_LIPS_SHARED:-$ROOT/../shared}"
 for d in cantilever cantilever_f32 block4 cantilever_static sticky_slabs cantilever_blend; do
   STICKY_LIPS_OUT="$OUT/$d" "$PY" -m pytest -q scripts/check_outputs.py
 done
+step "paper --quick: every figure from one command (coarse mouth)"
+"$BIN" paper --quick --out "$OUT/paper-quick" --threads 2
+for f in fig1_sticky_opening fig2_materials fig4_opening_over_time fig6_blend_baseline fig7_slight_opening \
+         fig7_gap_profiles fig8_wide_opening fig8_gap_profiles fig9_moisture_bands fig10_asymmetric \
+         fig11_textured plot_open_fraction plot_broken plot_kglue_sweep plot_asymmetry; do
+  test -s "$OUT/paper-quick/$f.png" || { echo "paper --quick did not write $f.png" >&2; exit 1; }
+done
+test -s "$OUT/paper-quick/table1.md" && test -s "$OUT/paper-quick/measured.json"
+STICKY_LIPS_OUT="$OUT/paper-quick/runs/fig4_sticky" "$PY" -m pytest -q scripts/check_outputs.py
+
 printf '\nall checks passed\n'

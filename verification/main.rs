@@ -6,6 +6,7 @@ mod element;
 mod inputs;
 mod muscle_jaw_blend;
 mod niftysim;
+mod paper_claims;
 mod patch;
 mod precision;
 mod saliva;

@@ -533,6 +533,7 @@ fn one_element_problem(params: SalivaParams) -> Problem {
                 params,
             }],
             muscles: vec![],
+            lip_columns: None,
         },
     }
 }
@@ -959,6 +960,7 @@ fn slabs(
                 ),
             }],
             muscles: vec![],
+            lip_columns: None,
         },
     };
     Slabs {
