@@ -301,8 +301,8 @@ pub fn line_plot(spec: &PlotSpec) -> Image {
     })
 }
 
-fn styled_mesh<'a, 'b, X, Y>(
-    chart: &'b mut ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, Y>>,
+fn styled_mesh<'a, X, Y>(
+    chart: &mut ChartContext<'a, BitMapBackend<'a>, Cartesian2d<X, Y>>,
     x_label: &str,
     y_label: &str,
 ) -> PlotResult

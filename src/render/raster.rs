@@ -872,7 +872,7 @@ fn draw_triangle(
     let x_hi = x_hi as usize;
     let ry0 = (t.ymin.max(y0 as i64)) as usize;
     let ry1 = (t.ymax.min((y0 + rows) as i64 - 1)).max(-1);
-    if (ry1 as i64) < ry0 as i64 {
+    if ry1 < ry0 as i64 {
         return;
     }
     let ry1 = ry1 as usize;

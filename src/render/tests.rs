@@ -369,7 +369,7 @@ fn wireframe_draws_quad_edges_not_diagonals() {
     assert_eq!(img.get(px(0.5), 50), [200, 200, 200]);
     // The shared edge x = 0 is drawn, two pixels wide.
     let dark = (45..56).filter(|&x| img.get(x, 30)[0] < 60).count();
-    assert!(dark >= 1 && dark <= 3, "{dark}");
+    assert!((1..=3).contains(&dark), "{dark}");
     // The outline x = 1 too (half of the line lies outside the face).
     assert!((80..95).any(|x| img.get(x, 30)[0] < 120));
 }
@@ -380,7 +380,7 @@ fn labels_and_grids() {
     img.label("Hello 0.04 s", 4, 4, 18.0, BLACK);
     assert!(img.count_not(BG) > 50);
     let (tw, th) = text_size("Hello 0.04 s", 18.0);
-    assert!(tw > 60 && tw < 120 && th >= 18 && th < 30, "{tw} x {th}");
+    assert!(tw > 60 && tw < 120 && (18..30).contains(&th), "{tw} x {th}");
     let a = Image::new(30, 20, [255, 0, 0]);
     let b = Image::new(20, 10, [0, 0, 255]);
     let g = Image::grid(&[a.clone(), b.clone(), a.clone()], 2, 5, BG);
