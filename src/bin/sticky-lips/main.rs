@@ -158,6 +158,9 @@ enum Command {
         quick: bool,
         #[arg(long, default_value_t = 2)]
         threads: usize,
+        /// Reuse complete runs in OUT/runs and only redraw the figures.
+        #[arg(long)]
+        reuse: bool,
     },
     /// Blend shapes (paper eq. 1): x' = X + sum_i w_i B_i, written as an output frame.
     Blend {
@@ -334,6 +337,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             scenarios,
             quick,
             threads,
+            reuse,
         } => {
             let progress = if std::io::stderr().is_terminal() {
                 Progress::Bar
@@ -346,6 +350,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                 quick,
                 threads,
                 progress,
+                reuse,
             })?;
         }
         Command::Mouth {
