@@ -21,9 +21,14 @@
 //! Verified by `verification/element.rs` (forces are the gradient of the energy; rigid
 //! rotations give no force; hourglass forces vanish for linear fields) and
 //! `verification/niftysim.rs` (NiftySim's `Urand` element-force tests).
+//!
+//! The stage runs the lane-parallel copy of [`element_force`] in `tled::simd` on blocks of
+//! `T::LANES` elements; it returns the same bits as [`element_force`] for every element
+//! ([`element_forces_scalar`] is the reference it is tested against).
 
 use crate::material::neo_hookean::pk2_stress;
 use crate::real::Real;
+use crate::tled::simd::BLOCK_CONSTANTS;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -79,7 +84,9 @@ pub fn element_force<T: Real>(
     (f, J)
 }
 
-/// Per-element constants in the stepping precision (structure of arrays).
+/// Per-element constants in the stepping precision: per element (structure of arrays, for
+/// the scalar reference and the saliva stage), and block-wise for the lane kernel (built
+/// once from the same values; read-only afterwards).
 #[derive(Clone, Debug)]
 pub struct ElementArrays<T> {
     pub conn: Vec<[u32; 8]>,
@@ -89,6 +96,10 @@ pub struct ElementArrays<T> {
     pub hg_k: Vec<T>,
     pub mu: Vec<T>,
     pub bulk: Vec<T>,
+    /// Node indices per block of `T::LANES` elements, `[block][a][lane]`.
+    block_conn: Vec<u32>,
+    /// Constants per block, `[block][row][lane]` (rows: see `tled::simd`).
+    block_data: Vec<T>,
 }
 
 impl<T: Real> ElementArrays<T> {
@@ -96,7 +107,7 @@ impl<T: Real> ElementArrays<T> {
         let c3 = |g: &[[f64; 3]; 8]| g.map(|r| r.map(T::from_f64));
         let c4 = |g: &[[f64; 4]; 8]| g.map(|r| r.map(T::from_f64));
         let cv = |v: &[f64]| v.iter().map(|&x| T::from_f64(x)).collect::<Vec<T>>();
-        ElementArrays {
+        let mut el = ElementArrays {
             conn: d.conn.clone(),
             dhdx: d.dhdx.iter().map(c3).collect(),
             weight: cv(&d.weight),
@@ -104,6 +115,38 @@ impl<T: Real> ElementArrays<T> {
             hg_k: cv(&d.hg_k),
             mu: cv(&d.mu),
             bulk: cv(&d.bulk),
+            block_conn: Vec::new(),
+            block_data: Vec::new(),
+        };
+        el.build_blocks();
+        el
+    }
+
+    /// Fills the block arrays from the per-element ones. Padding lanes of the last block:
+    /// node 0 and zero constants (zero force, `J = 1`).
+    fn build_blocks(&mut self) {
+        let l = T::LANES;
+        let nb = self.len().div_ceil(l);
+        self.block_conn = vec![0; nb * 8 * l];
+        self.block_data = vec![T::ZERO; nb * BLOCK_CONSTANTS * l];
+        for e in 0..self.len() {
+            let (b, lane) = (e / l, e % l);
+            for a in 0..8 {
+                self.block_conn[(b * 8 + a) * l + lane] = self.conn[e][a];
+            }
+            let row = |r: usize| (b * BLOCK_CONSTANTS + r) * l + lane;
+            for a in 0..8 {
+                for j in 0..3 {
+                    self.block_data[row(3 * a + j)] = self.dhdx[e][a][j];
+                }
+                for alpha in 0..4 {
+                    self.block_data[row(24 + 4 * a + alpha)] = self.gamma[e][a][alpha];
+                }
+            }
+            self.block_data[row(56)] = self.weight[e];
+            self.block_data[row(57)] = self.hg_k[e];
+            self.block_data[row(58)] = self.mu[e];
+            self.block_data[row(59)] = self.bulk[e];
         }
     }
 
@@ -115,13 +158,58 @@ impl<T: Real> ElementArrays<T> {
     }
 }
 
-/// Elements per parallel work item.
+/// Elements per parallel work item (a multiple of every `T::LANES`).
 pub const ELEMENT_CHUNK: usize = 256;
 
 /// Stage `element_forces`: writes the 8x3 force block of every element into `out`.
 /// Returns the smallest index of an element whose `det F` is not positive (or not
 /// finite), if any: the caller stops the run there.
+///
+/// Lane-parallel (`tled::simd`), bit-identical to [`element_forces_scalar`].
 pub fn element_forces<T: Real>(
+    el: &ElementArrays<T>,
+    u: &[[T; 3]],
+    out: &mut [[[T; 3]; 8]],
+) -> Option<usize> {
+    element_forces_with(el, u, out, T::element_blocks)
+}
+
+/// [`element_forces`] with the portable lanes (no AVX2) whatever the processor (for tests:
+/// both copies must give the same bits).
+pub fn element_forces_portable<T: Real>(
+    el: &ElementArrays<T>,
+    u: &[[T; 3]],
+    out: &mut [[[T; 3]; 8]],
+) -> Option<usize> {
+    element_forces_with(el, u, out, T::element_blocks_portable)
+}
+
+type BlockFn<T> = fn(&[u32], &[T], &[[T; 3]], usize, &mut [[[T; 3]; 8]]) -> usize;
+
+fn element_forces_with<T: Real>(
+    el: &ElementArrays<T>,
+    u: &[[T; 3]],
+    out: &mut [[[T; 3]; 8]],
+    run: BlockFn<T>,
+) -> Option<usize> {
+    assert_eq!(out.len(), el.len(), "one force block per element");
+    assert_eq!(ELEMENT_CHUNK % T::LANES, 0);
+    let bad = AtomicUsize::new(usize::MAX);
+    out.par_chunks_mut(ELEMENT_CHUNK)
+        .enumerate()
+        .for_each(|(c, chunk)| {
+            let first_block = c * ELEMENT_CHUNK / T::LANES;
+            let b = run(&el.block_conn, &el.block_data, u, first_block, chunk);
+            if b != usize::MAX {
+                bad.fetch_min(b, Ordering::Relaxed);
+            }
+        });
+    let b = bad.into_inner();
+    (b != usize::MAX).then_some(b)
+}
+
+/// The reference: [`element_force`] element by element. Same contract as [`element_forces`].
+pub fn element_forces_scalar<T: Real>(
     el: &ElementArrays<T>,
     u: &[[T; 3]],
     out: &mut [[[T; 3]; 8]],
@@ -152,4 +240,110 @@ pub fn element_forces<T: Real>(
         });
     let b = bad.into_inner();
     (b != usize::MAX).then_some(b)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lcg(s: &mut u64) -> f64 {
+        *s = s
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (*s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    }
+
+    /// `ne` elements on `nn` nodes with random constants of realistic size (gradients
+    /// ~ 1/h for h = 2 mm) and displacements giving strains of a few percent.
+    fn random_case<T: Real>(ne: usize, nn: usize, seed: u64) -> (ElementArrays<T>, Vec<[T; 3]>) {
+        let mut s = seed;
+        let mut r = |scale: f64| T::from_f64(scale * lcg(&mut s));
+        let conn: Vec<[u32; 8]> = (0..ne)
+            .map(|e| std::array::from_fn(|a| ((e * 7 + a * 13 + (a * a * e) % 11) % nn) as u32))
+            .collect();
+        let mut el = ElementArrays {
+            conn,
+            dhdx: (0..ne)
+                .map(|_| std::array::from_fn(|_| std::array::from_fn(|_| r(500.0))))
+                .collect(),
+            weight: (0..ne).map(|_| r(1e-8) + T::from_f64(1e-8)).collect(),
+            gamma: (0..ne)
+                .map(|_| std::array::from_fn(|_| std::array::from_fn(|_| r(0.5))))
+                .collect(),
+            hg_k: (0..ne).map(|_| r(10.0) + T::from_f64(10.0)).collect(),
+            mu: (0..ne).map(|_| r(500.0) + T::from_f64(1000.0)).collect(),
+            bulk: (0..ne).map(|_| r(5000.0) + T::from_f64(10000.0)).collect(),
+            block_conn: Vec::new(),
+            block_data: Vec::new(),
+        };
+        el.build_blocks();
+        let u = (0..nn).map(|_| std::array::from_fn(|_| r(2e-5))).collect();
+        (el, u)
+    }
+
+    fn bits<T: Real>(f: &[[[T; 3]; 8]]) -> Vec<u64> {
+        f.iter()
+            .flatten()
+            .flatten()
+            .map(|x| x.to_f64().to_bits())
+            .collect()
+    }
+
+    fn lanes_equal_scalar<T: Real>() {
+        for (k, ne) in [1, 3, 4, 5, 8, 13, 255, 256, 300, 517]
+            .into_iter()
+            .enumerate()
+        {
+            let (el, u) = random_case::<T>(ne, ne + 9, 17 + k as u64);
+            let mut reference = vec![[[T::ZERO; 3]; 8]; ne];
+            let mut lanes = reference.clone();
+            let mut portable = reference.clone();
+            assert_eq!(element_forces_scalar(&el, &u, &mut reference), None);
+            assert_eq!(element_forces(&el, &u, &mut lanes), None);
+            assert_eq!(element_forces_portable(&el, &u, &mut portable), None);
+            assert!(reference.iter().flatten().flatten().any(|&x| x != T::ZERO));
+            assert_eq!(bits(&lanes), bits(&reference), "{} ne = {ne}", T::NAME);
+            assert_eq!(bits(&portable), bits(&reference), "{} ne = {ne}", T::NAME);
+        }
+    }
+
+    #[test]
+    fn lane_kernel_equals_scalar_reference_bit_for_bit_f64() {
+        lanes_equal_scalar::<f64>();
+    }
+
+    #[test]
+    fn lane_kernel_equals_scalar_reference_bit_for_bit_f32() {
+        lanes_equal_scalar::<f32>();
+    }
+
+    fn reports_first_bad_element<T: Real>() {
+        let ne = 300;
+        let (el, mut u) = random_case::<T>(ne, ne + 9, 5);
+        let mut f = vec![[[T::ZERO; 3]; 8]; ne];
+        // large displacements of one node invert some of its elements
+        let n = el.conn[201][3] as usize;
+        let first = (0..ne).find(|&e| el.conn[e].contains(&(n as u32))).unwrap();
+        let mut g = f.clone();
+        let mut inverted = 0;
+        for k in 0..20 {
+            u[n] = [0, 1, 2].map(|i| T::from_f64(0.01 * ((k * 3 + i) as f64 - 30.0)));
+            let s = element_forces_scalar(&el, &u, &mut f);
+            inverted += usize::from(s.is_some());
+            assert!(s.is_none_or(|e| e >= first), "{s:?}");
+            assert_eq!(element_forces(&el, &u, &mut g), s);
+            assert_eq!(element_forces_portable(&el, &u, &mut g), s);
+        }
+        assert!(inverted > 0);
+        u[n] = [T::from_f64(f64::NAN); 3];
+        let s = element_forces_scalar(&el, &u, &mut f);
+        assert_eq!(s, Some(first));
+        assert_eq!(element_forces(&el, &u, &mut g), Some(first));
+    }
+
+    #[test]
+    fn lane_kernel_reports_the_first_bad_element() {
+        reports_first_bad_element::<f64>();
+        reports_first_bad_element::<f32>();
+    }
 }

@@ -5,6 +5,7 @@ pub mod element_forces;
 pub mod node_update;
 pub mod precompute;
 pub mod saliva_forces;
+pub mod simd;
 pub mod solver;
 pub mod stability;
 

@@ -48,12 +48,30 @@ impl<T: Real> CentralDifference<T> {
 /// Sum of the element force blocks at node `n`, in the gather list's fixed order.
 #[inline(always)]
 pub fn gather_node<T: Real>(gather: &NodeGather, elem_f: &[[[T; 3]; 8]], n: usize) -> [T; 3] {
+    gather_slots(gather.of(n), elem_f.as_flattened())
+}
+
+/// Sum of `corners[s]` over the slots `s` (`corners` = the element blocks flattened, slot
+/// `8 e + a`), starting from zero, in the order given.
+#[inline(always)]
+fn gather_slots<T: Real>(slots: &[u32], corners: &[[T; 3]]) -> [T; 3] {
     let mut f = [T::ZERO; 3];
-    for &s in gather.of(n) {
-        let blk = &elem_f[s as usize / 8][s as usize % 8];
-        f[0] += blk[0];
-        f[1] += blk[1];
-        f[2] += blk[2];
+    let mut add = |s: u32| {
+        let c = &corners[s as usize];
+        f[0] += c[0];
+        f[1] += c[1];
+        f[2] += c[2];
+    };
+    // unrolled by 4 (same order of terms)
+    let mut quads = slots.chunks_exact(4);
+    for q in quads.by_ref() {
+        add(q[0]);
+        add(q[1]);
+        add(q[2]);
+        add(q[3]);
+    }
+    for &s in quads.remainder() {
+        add(s);
     }
     f
 }
@@ -72,28 +90,40 @@ pub fn node_update<T: Real>(
 ) -> Option<usize> {
     let bad = AtomicUsize::new(usize::MAX);
     let c1 = cd.c1;
+    let n = u_next.len();
+    assert!(u.len() == n && u_prev.len() == n && cd.a.len() == n);
+    assert!(gather.offsets.len() == n + 1 && r_ext.is_none_or(|r| r.len() == n));
+    let corners = elem_f.as_flattened();
     u_next
         .par_chunks_mut(NODE_CHUNK)
         .enumerate()
         .for_each(|(c, chunk)| {
             let base = c * NODE_CHUNK;
-            for (i, un) in chunk.iter_mut().enumerate() {
-                let n = base + i;
-                let f = gather_node(gather, elem_f, n);
+            let end = base + chunk.len();
+            let (u, u_prev, a) = (&u[base..end], &u_prev[base..end], &cd.a[base..end]);
+            let offsets = &gather.offsets[base..=end];
+            let mut first_bad = usize::MAX;
+            for i in 0..chunk.len() {
+                let slots = &gather.slots[offsets[i] as usize..offsets[i + 1] as usize];
+                let f = gather_slots(slots, corners);
                 let r = match r_ext {
-                    Some(r) => r[n],
+                    Some(r) => r[base + i],
                     None => [T::ZERO; 3],
                 };
-                let a = cd.a[n];
-                let mut finite = true;
+                let (un, up, ai) = (u[i], u_prev[i], a[i]);
+                let mut v = [T::ZERO; 3];
                 for k in 0..3 {
-                    let v = u[n][k] + a * (r[k] - f[k]) + c1 * (u[n][k] - u_prev[n][k]);
-                    finite &= v.is_finite();
-                    un[k] = v;
+                    v[k] = un[k] + ai * (r[k] - f[k]) + c1 * (un[k] - up[k]);
                 }
-                if !finite {
-                    bad.fetch_min(n, Ordering::Relaxed);
+                chunk[i] = v;
+                if !(v[0].is_finite() && v[1].is_finite() && v[2].is_finite())
+                    && first_bad == usize::MAX
+                {
+                    first_bad = base + i;
                 }
+            }
+            if first_bad != usize::MAX {
+                bad.fetch_min(first_bad, Ordering::Relaxed);
             }
         });
     let b = bad.into_inner();

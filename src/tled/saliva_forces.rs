@@ -13,6 +13,9 @@ use crate::tled::precompute::SalivaPlan;
 pub struct SalivaState<T> {
     across: Vec<[T; 3]>,
     decay: Vec<T>,
+    /// Evaporated depth per group at the current step (um); kept here so the step
+    /// allocates nothing.
+    evaporated: Vec<f64>,
     /// The modified force `F` of the previous step (8x3 per element).
     pub previous: Vec<[[T; 3]; 8]>,
     /// Broken at the last step (for `literal`: `Q >= Z` now; for `latched`: ever).
@@ -35,6 +38,7 @@ impl<T: Real> SalivaState<T> {
                 .iter()
                 .map(|g| T::from_f64(g.decay.factor(dt)))
                 .collect(),
+            evaporated: vec![0.0; plan.groups.len()],
             previous: vec![[[T::ZERO; 3]; 8]; n],
             broken: vec![false; n],
             broken_at: vec![f64::NAN; n],
@@ -63,11 +67,9 @@ pub fn saliva_forces<T: Real>(
     elem_f: &mut [[[T; 3]; 8]],
     t: f64,
 ) {
-    let evaporated: Vec<f64> = plan
-        .groups
-        .iter()
-        .map(|g| g.evaporation.evaporated(t))
-        .collect();
+    for (ev, g) in state.evaporated.iter_mut().zip(&plan.groups) {
+        *ev = g.evaporation.evaporated(t);
+    }
     for k in 0..plan.elements.len() {
         let e = plan.elements[k] as usize;
         let g = plan.group[k] as usize;
@@ -84,7 +86,7 @@ pub fn saliva_forces<T: Real>(
             }
         }
         let q = stretch_across(&h, &state.across[k]);
-        let m = moisture(plan.initial_moisture[k], evaporated[g]);
+        let m = moisture(plan.initial_moisture[k], state.evaporated[g]);
         let z = breaking_point(m, params.critical_moisture, params.k_glue);
         let broken = apply_breaking_rule(
             q,

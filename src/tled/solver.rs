@@ -34,6 +34,8 @@ pub struct Simulation<T: Real> {
     elem_f: Vec<[[T; 3]; 8]>,
     r_ext: Vec<[T; 3]>,
     saliva: SalivaState<T>,
+    /// Scratch for `apply_constraints_into` (no allocation inside a step).
+    prescribed_acc: Vec<f64>,
     step: usize,
     num_steps: usize,
     dt: f64,
@@ -60,6 +62,7 @@ impl<T: Real> Simulation<T> {
             elem_f: vec![[[T::ZERO; 3]; 8]; ne],
             r_ext: vec![[T::ZERO; 3]; nn],
             saliva: SalivaState::new(&disc.saliva, problem.time.dt),
+            prescribed_acc: Vec::with_capacity(disc.constraints.prescribed_dofs.len()),
             step: 0,
             num_steps: problem.num_steps(),
             dt: problem.time.dt,
@@ -157,7 +160,14 @@ impl<T: Real> Simulation<T> {
             });
         }
         let (t_next, clamp) = self.constraint_time(s + 1);
-        apply_constraints(&self.disc, &self.reference, &mut self.u_next, t_next, clamp);
+        apply_constraints_into(
+            &self.disc,
+            &self.reference,
+            &mut self.u_next,
+            t_next,
+            clamp,
+            &mut self.prescribed_acc,
+        );
         std::mem::swap(&mut self.u_prev, &mut self.u);
         std::mem::swap(&mut self.u, &mut self.u_next);
         self.step += 1;
@@ -241,21 +251,38 @@ pub fn apply_constraints<T: Real>(
     t: f64,
     clamp: bool,
 ) {
+    apply_constraints_into(d, reference, u, t, clamp, &mut Vec::new());
+}
+
+/// [`apply_constraints`] with a caller-owned accumulator (`acc`, resized as needed), so
+/// that a step allocates nothing.
+pub fn apply_constraints_into<T: Real>(
+    d: &Discretisation,
+    reference: &[[f64; 3]],
+    u: &mut [[T; 3]],
+    t: f64,
+    clamp: bool,
+    acc: &mut Vec<f64>,
+) {
     let c = &d.constraints;
     for &k in &c.fixed {
         u[k as usize / 3][k as usize % 3] = T::ZERO;
     }
     if !c.prescribed.is_empty() {
-        // accumulate in f64, then round once
-        let mut acc: std::collections::BTreeMap<u32, f64> =
-            c.prescribed_dofs.iter().map(|&k| (k, 0.0)).collect();
+        // accumulate in f64 per DOF (groups and entries in order), then round once
+        acc.clear();
+        acc.resize(c.prescribed_dofs.len(), 0.0);
         for (curve, entries) in &c.prescribed {
             let s = curve.value(t, clamp);
             for &(k, v) in entries {
-                *acc.get_mut(&k).expect("prescribed dof planned") += v * s;
+                let i = c
+                    .prescribed_dofs
+                    .binary_search(&k)
+                    .expect("prescribed dof planned");
+                acc[i] += v * s;
             }
         }
-        for (k, v) in acc {
+        for (&k, &v) in c.prescribed_dofs.iter().zip(acc.iter()) {
             u[k as usize / 3][k as usize % 3] = T::from_f64(v);
         }
     }
