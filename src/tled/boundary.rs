@@ -112,13 +112,23 @@ pub struct PrescribedRotation {
 impl PrescribedRotation {
     /// Displacement of reference point `x` at time `t`.
     pub fn displacement(&self, x: &[f64; 3], t: f64, clamp: bool) -> [f64; 3] {
-        let r = rotation_matrix(&self.axis, self.angle * self.curve.value(t, clamp));
+        self.displacement_by(&self.matrix(t, clamp), x)
+    }
+
+    /// The rotation matrix at time `t` (one per step, shared by all of the set's nodes).
+    pub fn matrix(&self, t: f64, clamp: bool) -> [[f64; 3]; 3] {
+        rotation_matrix(&self.axis, self.angle * self.curve.value(t, clamp))
+    }
+
+    /// Displacement of reference point `x` under the rotation `r` (from [`Self::matrix`]):
+    /// `R (x - p) - (x - p)`.
+    pub fn displacement_by(&self, r: &[[f64; 3]; 3], x: &[f64; 3]) -> [f64; 3] {
         let d = [
             x[0] - self.point[0],
             x[1] - self.point[1],
             x[2] - self.point[2],
         ];
-        let rd = crate::linalg::mat_vec(&r, &d);
+        let rd = crate::linalg::mat_vec(r, &d);
         [rd[0] - d[0], rd[1] - d[1], rd[2] - d[2]]
     }
 }

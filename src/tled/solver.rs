@@ -287,8 +287,9 @@ pub fn apply_constraints_into<T: Real>(
         }
     }
     for r in &c.rotations {
+        let m = r.matrix(t, clamp);
         for &n in &r.nodes {
-            let du = r.displacement(&reference[n as usize], t, clamp);
+            let du = r.displacement_by(&m, &reference[n as usize]);
             u[n as usize] = du.map(T::from_f64);
         }
     }
