@@ -170,8 +170,46 @@ impl Image {
     ) -> Image {
         let cols = cols.max(1);
         let rows = images.len().div_ceil(cols).max(1);
-        let cw = images.iter().map(|i| i.width).max().unwrap_or(0);
-        let ch = images.iter().map(|i| i.height).max().unwrap_or(0);
+        // each column as wide as its widest image, each row as tall as its tallest (a legend
+        // beside or below a rendering takes only the room it needs)
+        let col_w: Vec<u32> = (0..cols)
+            .map(|c| {
+                images
+                    .iter()
+                    .skip(c)
+                    .step_by(cols)
+                    .map(|i| i.width)
+                    .max()
+                    .unwrap_or(0)
+            })
+            .collect();
+        let row_h: Vec<u32> = (0..rows)
+            .map(|r| {
+                images
+                    .iter()
+                    .skip(r * cols)
+                    .take(cols)
+                    .map(|i| i.height)
+                    .max()
+                    .unwrap_or(0)
+            })
+            .collect();
+        let col_x: Vec<u32> = col_w
+            .iter()
+            .scan(0, |x, &w| {
+                let x0 = *x;
+                *x += w + spacing;
+                Some(x0)
+            })
+            .collect();
+        let row_y: Vec<u32> = row_h
+            .iter()
+            .scan(0, |y, &h| {
+                let y0 = *y;
+                *y += h + spacing;
+                Some(y0)
+            })
+            .collect();
         let ts = labels.text_size;
         let nonempty = |v: &[&str]| v.iter().any(|s| !s.is_empty());
         let title_h = match labels.title {
@@ -200,11 +238,12 @@ impl Image {
         } else {
             0
         };
-        let width = 2 * spacing + row_w + cols as u32 * cw + (cols as u32 - 1) * spacing;
-        let height = 2 * spacing + title_h + col_h + rows as u32 * ch + (rows as u32 - 1) * spacing;
+        let width = 2 * spacing + row_w + col_w.iter().sum::<u32>() + (cols as u32 - 1) * spacing;
+        let height =
+            2 * spacing + title_h + col_h + row_h.iter().sum::<u32>() + (rows as u32 - 1) * spacing;
         let mut out = Image::new(width, height, background);
-        let x_of = |c: usize| (spacing + row_w + c as u32 * (cw + spacing)) as i64;
-        let y_of = |r: usize| (spacing + title_h + col_h + r as u32 * (ch + spacing)) as i64;
+        let x_of = |c: usize| (spacing + row_w + col_x[c]) as i64;
+        let y_of = |r: usize| (spacing + title_h + col_h + row_y[r]) as i64;
         if let Some(t) = labels.title {
             out.label_centred(
                 t,
@@ -217,7 +256,7 @@ impl Image {
         for (c, t) in labels.column_titles.iter().enumerate().take(cols) {
             out.label_centred(
                 t,
-                x_of(c) + cw as i64 / 2,
+                x_of(c) + col_w[c] as i64 / 2,
                 (spacing + title_h) as i64,
                 ts,
                 labels.text_colour,
@@ -228,15 +267,15 @@ impl Image {
             out.label(
                 t,
                 spacing as i64,
-                y_of(r) + (ch as i64 - th) / 2,
+                y_of(r) + (row_h[r] as i64 - th) / 2,
                 ts,
                 labels.text_colour,
             );
         }
         for (i, img) in images.iter().enumerate() {
             let (r, c) = (i / cols, i % cols);
-            let x = x_of(c) + (cw - img.width) as i64 / 2;
-            let y = y_of(r) + (ch - img.height) as i64 / 2;
+            let x = x_of(c) + (col_w[c] - img.width) as i64 / 2;
+            let y = y_of(r) + (row_h[r] - img.height) as i64 / 2;
             out.blit(img, x, y);
         }
         out

@@ -384,13 +384,18 @@ fn labels_and_grids() {
     let a = Image::new(30, 20, [255, 0, 0]);
     let b = Image::new(20, 10, [0, 0, 255]);
     let g = Image::grid(&[a.clone(), b.clone(), a.clone()], 2, 5, BG);
+    // columns as wide as their widest image (30, 20), rows as tall as their tallest (20, 20)
     assert_eq!(
         (g.width, g.height),
-        (5 + 30 + 5 + 30 + 5, 5 + 20 + 5 + 20 + 5)
+        (5 + 30 + 5 + 20 + 5, 5 + 20 + 5 + 20 + 5)
     );
     assert_eq!(g.get(5, 5), [255, 0, 0]);
-    assert_eq!(g.get(40 + 5 + 10, 5 + 5 + 5), [0, 0, 255]); // b centred in its cell
+    assert_eq!(g.get(40 + 10, 5 + 5 + 5), [0, 0, 255]); // b centred vertically in its row
     assert_eq!(g.get(40 + 1, 5 + 1), BG);
+    // a legend-like short image below a tall one takes only its own height
+    let s = Image::grid(&[a.clone(), b.clone()], 1, 5, BG);
+    assert_eq!((s.width, s.height), (5 + 30 + 5, 5 + 20 + 5 + 10 + 5));
+    assert_eq!(s.get(5 + 5 + 10, 5 + 20 + 5 + 5), [0, 0, 255]);
     let labels = GridLabels {
         title: Some("Figure"),
         column_titles: &["without", "with"],
