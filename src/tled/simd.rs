@@ -531,36 +531,77 @@ mod avx {
         }
     }
 
-    /// [`Real::cbrt`](crate::real::Real::cbrt) of 4 lanes: the range reduction
-    /// (`real::cbrt_reduce`, integer work on the bits) lane by lane, the Newton steps
-    /// (`real::cbrt_refine`, the same generic code as the scalar root) in AVX registers, and
-    /// the rare zero, subnormal, infinite or NaN lanes by the scalar code.
+    /// [`Real::cbrt`](crate::real::Real::cbrt) of 4 lanes: the range reduction of
+    /// `real::cbrt_reduce` on the bits in AVX2 integer registers (see
+    /// [`cbrt_reduce_f64x4`]), the Newton steps (`real::cbrt_refine`, the same generic code
+    /// as the scalar root) in AVX registers, and the rare zero, subnormal, infinite or NaN
+    /// lanes by the scalar code.
     #[inline(always)]
     fn cbrt_f64x4(x: F64x4) -> F64x4 {
-        use crate::real::{cbrt_is_normal, cbrt_reduce, cbrt_refine, cbrt_special};
-        let xa = x.to_array();
-        let (mut a, mut w0, mut s) = ([1.0; 4], [1.0; 4], [1.0; 4]);
-        let mut all_normal = true;
-        for l in 0..4 {
-            (a[l], w0[l], s[l]) = cbrt_reduce(xa[l]);
-            all_normal &= cbrt_is_normal(xa[l]);
-        }
-        let y = cbrt_refine(
-            F64x4::from_array(a),
-            F64x4::from_array(w0),
-            F64x4::from_array(s),
-            F64x4::splat,
-        );
+        use crate::real::{cbrt_is_normal, cbrt_refine, cbrt_special};
+        let (a, w0, s, all_normal) = cbrt_reduce_f64x4(x);
+        let y = cbrt_refine(a, w0, s, F64x4::splat);
         if all_normal {
             return y;
         }
-        let mut ya = y.to_array();
+        let (xa, mut ya) = (x.to_array(), y.to_array());
         for l in 0..4 {
             if !cbrt_is_normal(xa[l]) {
                 ya[l] = cbrt_special(xa[l]);
             }
         }
         F64x4::from_array(ya)
+    }
+
+    /// `real::cbrt_reduce` of 4 lanes, with the same exact results: for a normal `x` with
+    /// biased exponent `E` (1..=2046) and `e = E - 1023 = 3 q + r`,
+    /// `q = floor(E / 3) - 341` (1023 = 3 * 341) and `r = E - 3 floor(E / 3)`, where
+    /// `floor(E / 3) = (43691 E) >> 17` for every `E < 2^15` (checked exhaustively in the
+    /// tests). `a`, `m` and `s` are assembled from the bits; `w0` is the same polynomial in
+    /// `m`, evaluated in the same order, times `2^(-r/3)` picked by comparison. The fourth
+    /// value says whether every lane is normal (else the caller mends those lanes).
+    #[inline(always)]
+    fn cbrt_reduce_f64x4(x: F64x4) -> (F64x4, F64x4, F64x4, bool) {
+        use crate::real::{CBRT_G0, CBRT_G1, CBRT_G2, CBRT_INV_ROOT2};
+        const MANTISSA: i64 = (1 << 52) - 1;
+        // SAFETY: AVX2 (module contract); register operations only.
+        unsafe {
+            let bits = _mm256_castpd_si256(x.0);
+            let mant = _mm256_and_si256(bits, _mm256_set1_epi64x(MANTISSA));
+            let big_e = _mm256_and_si256(_mm256_srli_epi64::<52>(bits), _mm256_set1_epi64x(0x7ff));
+            let special = _mm256_or_si256(
+                _mm256_cmpeq_epi64(big_e, _mm256_setzero_si256()),
+                _mm256_cmpeq_epi64(big_e, _mm256_set1_epi64x(0x7ff)),
+            );
+            let all_normal = _mm256_testz_si256(special, special) == 1;
+            // floor(E / 3) and r = E - 3 floor(E / 3) (32-bit products in 64-bit lanes)
+            let e3 = _mm256_srli_epi64::<17>(_mm256_mul_epu32(big_e, _mm256_set1_epi64x(43691)));
+            let r = _mm256_sub_epi64(big_e, _mm256_mul_epu32(e3, _mm256_set1_epi64x(3)));
+            let m = _mm256_castsi256_pd(_mm256_or_si256(mant, _mm256_set1_epi64x(1023 << 52)));
+            let a = _mm256_castsi256_pd(_mm256_or_si256(
+                mant,
+                _mm256_slli_epi64::<52>(_mm256_add_epi64(r, _mm256_set1_epi64x(1023))),
+            ));
+            // 2^(q + 1023) with q + 1023 = floor(E / 3) + 682, and the sign of x
+            let s = _mm256_castsi256_pd(_mm256_or_si256(
+                _mm256_and_si256(bits, _mm256_set1_epi64x(i64::MIN)),
+                _mm256_slli_epi64::<52>(_mm256_add_epi64(e3, _mm256_set1_epi64x(682))),
+            ));
+            let r1 = _mm256_castsi256_pd(_mm256_cmpeq_epi64(r, _mm256_set1_epi64x(1)));
+            let r2 = _mm256_castsi256_pd(_mm256_cmpeq_epi64(r, _mm256_set1_epi64x(2)));
+            let root2 = _mm256_blendv_pd(
+                _mm256_blendv_pd(
+                    _mm256_set1_pd(CBRT_INV_ROOT2[0]),
+                    _mm256_set1_pd(CBRT_INV_ROOT2[1]),
+                    r1,
+                ),
+                _mm256_set1_pd(CBRT_INV_ROOT2[2]),
+                r2,
+            );
+            let (m, c) = (F64x4(m), F64x4::splat);
+            let w0 = (c(CBRT_G0) + m * (c(CBRT_G1) + m * c(CBRT_G2))) * F64x4(root2);
+            (F64x4(a), w0, F64x4(s), all_normal)
+        }
     }
 
     impl Lanes<f32, 8> for F32x8 {
@@ -742,6 +783,50 @@ mod avx {
         #[target_feature(enable = "avx2")]
         unsafe fn cbrt8(x: [f32; 8]) -> [f32; 8] {
             F32x8::from_array(x).cbrt().to_array()
+        }
+
+        #[test]
+        fn division_by_three_of_every_exponent() {
+            for e in 0u64..(1 << 15) {
+                assert_eq!((e * 43691) >> 17, e / 3, "{e}");
+            }
+        }
+
+        #[target_feature(enable = "avx2")]
+        unsafe fn reduce4(x: [f64; 4]) -> ([f64; 4], [f64; 4], [f64; 4], bool) {
+            let (a, w0, s, n) = cbrt_reduce_f64x4(F64x4::from_array(x));
+            (a.to_array(), w0.to_array(), s.to_array(), n)
+        }
+
+        #[test]
+        fn avx2_range_reduction_equals_scalar_for_every_exponent() {
+            if !std::arch::is_x86_feature_detected!("avx2") {
+                return;
+            }
+            // every biased exponent 1..=2046, both signs, several mantissas
+            for big_e in 1u64..=2046 {
+                let mant = [0u64, 1, (1 << 52) - 1, 0x5_5555_5555_5555 ^ big_e];
+                let x: [f64; 4] = std::array::from_fn(|l| {
+                    f64::from_bits(((l as u64 & 1) << 63) | (big_e << 52) | mant[l])
+                });
+                // SAFETY: AVX2 checked above.
+                let (a, w0, s, all_normal) = unsafe { reduce4(x) };
+                assert!(all_normal);
+                for l in 0..4 {
+                    let (ea, ew, es) = crate::real::cbrt_reduce(x[l]);
+                    assert_eq!(
+                        (a[l].to_bits(), w0[l].to_bits(), s[l].to_bits()),
+                        (ea.to_bits(), ew.to_bits(), es.to_bits()),
+                        "{:e}",
+                        x[l]
+                    );
+                }
+            }
+            for special in [0.0, -0.0, 1e-310, f64::INFINITY, f64::NAN] {
+                // SAFETY: AVX2 checked above.
+                let (_, _, _, all_normal) = unsafe { reduce4([1.0, 2.0, special, 3.0]) };
+                assert!(!all_normal, "{special:e}");
+            }
         }
 
         #[test]
