@@ -1,0 +1,70 @@
+//! WGSL assembly: each kernel is `shaders/<name>.wgsl` with the shared files of
+//! `shaders/common/` in front of it, all embedded with `include_str!`. The precision
+//! prelude (`real` = f32 or f64, `cbrt_r`, `is_finite_r`) comes first, then the constants
+//! of [`crate::gpu::layout`] generated from Rust.
+
+/// The precision preludes.
+const REAL_F32: &str = include_str!("../../shaders/common/real_f32.wgsl");
+const REAL_F64: &str = include_str!("../../shaders/common/real_f64.wgsl");
+/// Shared functions and structs, in dependency order.
+const COMMON: [&str; 4] = [
+    include_str!("../../shaders/common/layout.wgsl"),
+    include_str!("../../shaders/common/neo_hookean.wgsl"),
+    include_str!("../../shaders/common/element.wgsl"),
+    include_str!("../../shaders/common/saliva.wgsl"),
+];
+
+/// The compute kernels; each has one entry point named like the CPU stage it mirrors.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kernel {
+    /// `shaders/element_forces.wgsl`, twin of `tled::element_forces::element_forces`.
+    ElementForces,
+    /// `shaders/saliva_forces.wgsl`, twin of `tled::saliva_forces::saliva_forces`.
+    SalivaForces,
+    /// `shaders/node_update.wgsl`, twin of `tled::node_update::node_update` +
+    /// `tled::solver::apply_constraints`.
+    NodeUpdate,
+    /// `shaders/function_tests.wgsl`: one entry point per shared WGSL function, used by
+    /// `verification/gpu.rs` to compare each with its Rust twin.
+    FunctionTests,
+}
+
+pub const ALL_KERNELS: &[Kernel] = &[
+    Kernel::ElementForces,
+    Kernel::SalivaForces,
+    Kernel::NodeUpdate,
+    Kernel::FunctionTests,
+];
+
+impl Kernel {
+    pub fn name(self) -> &'static str {
+        match self {
+            Kernel::ElementForces => "element_forces",
+            Kernel::SalivaForces => "saliva_forces",
+            Kernel::NodeUpdate => "node_update",
+            Kernel::FunctionTests => "function_tests",
+        }
+    }
+    fn body(self) -> &'static str {
+        match self {
+            Kernel::ElementForces => include_str!("../../shaders/element_forces.wgsl"),
+            Kernel::SalivaForces => include_str!("../../shaders/saliva_forces.wgsl"),
+            Kernel::NodeUpdate => include_str!("../../shaders/node_update.wgsl"),
+            Kernel::FunctionTests => include_str!("../../shaders/function_tests.wgsl"),
+        }
+    }
+}
+
+/// The complete WGSL of `kernel` in f32 (`f64 = false`) or f64.
+pub fn kernel_source(kernel: Kernel, f64: bool) -> String {
+    let mut s = String::new();
+    s.push_str(if f64 { REAL_F64 } else { REAL_F32 });
+    s.push('\n');
+    s.push_str(&crate::gpu::layout::wgsl_constants());
+    for c in COMMON {
+        s.push_str(c);
+        s.push('\n');
+    }
+    s.push_str(kernel.body());
+    s
+}
