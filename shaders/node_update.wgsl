@@ -5,6 +5,7 @@
 // paper eq. (3) in increment form u_{s+1} = u_s + A (R - F) + c1 (u_s - u_{s-1}), then the
 // constraints at t_{s+1}: fixed DOFs to 0, prescribed and rotated DOFs to the values Rust
 // evaluated in f64 for this step (per-step table), so the jaw rotation matches the CPU's.
+// The load-curve values come per step from Rust too (`curves`); WGSL has no load shapes.
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<uniform> step: StepInfo;
@@ -20,11 +21,13 @@
 // CSR over nodes of load entries: offsets (num_nodes + 1), then keys (component | group << 2)
 @group(0) @binding(8) var<storage, read> load_key: array<u32>;
 // magnitude of each load entry (N), same order as the keys
-@group(0) @binding(9) var<storage, read> load_val: array<real>;
+@group(0) @binding(9) var<storage, read> load_val: array<load_real>;
 @group(0) @binding(10) var<storage, read> table: array<real>;
 // per DOF: DOF_FREE, DOF_FIXED or the index of its imposed value in a table row
 @group(0) @binding(11) var<storage, read> dof_slot: array<u32>;
 @group(0) @binding(12) var<storage, read_write> status: Status;
+// per step: the curve value of every load group at t_s (num_loads per row)
+@group(0) @binding(13) var<storage, read> curves: array<load_real>;
 
 @compute @workgroup_size(WG)
 fn node_update(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -48,15 +51,17 @@ fn node_update(@builtin(global_invocation_id) gid: vec3<u32>) {
         f[1] = f[1] + elem_f[base + 1u];
         f[2] = f[2] + elem_f[base + 2u];
     }
-    // external forces, in the CPU's accumulation order (group, then entry)
+    // external forces, in the CPU's accumulation order (group, then entry); each entry is
+    // real(v * c), the product formed in load_real
     var r = array<real, 3>(0.0, 0.0, 0.0);
     let row = step.row * params.table_stride;
+    let crow = step.row * params.num_loads;
     let l0 = load_key[n];
     let l1 = load_key[n + 1u];
     for (var i = l0; i < l1; i++) {
         let key = load_key[nn + 1u + i];
         let k = key & 3u;
-        r[k] = r[k] + load_val[i] * table[row + (key >> 2u)];
+        r[k] = r[k] + real(load_val[i] * curves[crow + (key >> 2u)]);
     }
     let a = node_a[n];
     let c1 = node_a[nn];

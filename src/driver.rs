@@ -206,7 +206,11 @@ impl<T: crate::gpu::GpuReal> Stepper for crate::gpu::GpuSimulation<T> {
         T::NAME
     }
     fn backend_name(&self) -> String {
-        format!("gpu: {}", self.context().describe())
+        format!(
+            "gpu: {}, kernels {:?}",
+            self.context().describe(),
+            self.shader_real()
+        )
     }
     fn advance(&mut self, n: usize) -> Result<()> {
         self.step_many(n)

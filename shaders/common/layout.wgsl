@@ -11,12 +11,13 @@ struct Params {
     num_saliva: u32,
     // reals per row of the per-step table
     table_stride: u32,
-    // offset in a row of the imposed displacement values (loads are at 0)
+    // offset in a row of the imposed displacement values
     imposed_base: u32,
     // offset in a row of the saliva breaking points Z (one per saliva element)
     saliva_base: u32,
+    // load groups: curve values per step in `curves` (a row of num_loads per step)
+    num_loads: u32,
     _pad0: u32,
-    _pad1: u32,
 }
 
 // The step a dispatch belongs to (bound with a dynamic offset, one per step of a batch).

@@ -32,12 +32,13 @@ pub struct Params {
     pub num_saliva: u32,
     /// Scalars per row of the per-step table.
     pub table_stride: u32,
-    /// Offset in a row of the imposed displacement values (load curve values are at 0).
+    /// Offset in a row of the imposed displacement values.
     pub imposed_base: u32,
     /// Offset in a row of the saliva breaking points `Z`.
     pub saliva_base: u32,
+    /// Load groups (a row of the `curves` buffer per step).
+    pub num_loads: u32,
     pub _pad0: u32,
-    pub _pad1: u32,
 }
 
 /// The step one dispatch belongs to; one per step of a batch, bound at a dynamic offset.
@@ -89,7 +90,7 @@ pub fn wgsl_constants() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gpu::shaders::{kernel_source, Kernel, ALL_KERNELS};
+    use crate::gpu::shaders::{kernel_source, Kernel, ShaderReal, ALL_KERNELS};
     use std::mem::{offset_of, size_of};
 
     fn validate(src: &str, caps: naga::valid::Capabilities) -> naga::Module {
@@ -105,8 +106,14 @@ mod tests {
     #[test]
     fn every_shader_validates_with_naga() {
         for &k in ALL_KERNELS {
-            validate(&kernel_source(k, false), naga::valid::Capabilities::empty());
-            validate(&kernel_source(k, true), naga::valid::Capabilities::FLOAT64);
+            for real in ShaderReal::ALL {
+                let caps = if real.needs_f64() {
+                    naga::valid::Capabilities::FLOAT64
+                } else {
+                    naga::valid::Capabilities::empty()
+                };
+                validate(&kernel_source(k, real), caps);
+            }
         }
     }
 
@@ -131,7 +138,7 @@ mod tests {
     #[test]
     fn pod_structs_match_their_wgsl_twins() {
         let module = validate(
-            &kernel_source(Kernel::NodeUpdate, false),
+            &kernel_source(Kernel::NodeUpdate, ShaderReal::F32),
             naga::valid::Capabilities::empty(),
         );
         macro_rules! check {
@@ -151,8 +158,8 @@ mod tests {
             table_stride,
             imposed_base,
             saliva_base,
-            _pad0,
-            _pad1
+            num_loads,
+            _pad0
         );
         check!(StepInfo, step, row, _pad0, _pad1);
         check!(Status, element_step, element, node_step, node);
@@ -162,7 +169,7 @@ mod tests {
     #[test]
     fn wgsl_constants_are_the_rust_ones() {
         let module = validate(
-            &kernel_source(Kernel::SalivaForces, false),
+            &kernel_source(Kernel::SalivaForces, ShaderReal::F32),
             naga::valid::Capabilities::empty(),
         );
         let value = |name: &str| -> u32 {

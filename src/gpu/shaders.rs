@@ -3,9 +3,36 @@
 //! prelude (`real` = f32 or f64, `cbrt_r`, `is_finite_r`) comes first, then the constants
 //! of [`crate::gpu::layout`] generated from Rust.
 
-/// The precision preludes.
-const REAL_F32: &str = include_str!("../../shaders/common/real_f32.wgsl");
-const REAL_F64: &str = include_str!("../../shaders/common/real_f64.wgsl");
+/// The f32-only cube root every prelude builds on.
+const CBRT: &str = include_str!("../../shaders/common/cbrt.wgsl");
+
+/// The scalar of a kernel and how its cube root is computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShaderReal {
+    /// f32, cube root in f32 arithmetic (within one ulp of the CPU's).
+    F32,
+    /// f32, cube root refined in f64 arithmetic: bit-identical to the CPU's (needs SHADER_F64).
+    F32ExactCbrt,
+    /// f64 (needs SHADER_F64).
+    F64,
+}
+
+impl ShaderReal {
+    pub const ALL: [ShaderReal; 3] = [ShaderReal::F32, ShaderReal::F32ExactCbrt, ShaderReal::F64];
+    /// Whether the kernel needs the adapter feature SHADER_F64.
+    pub fn needs_f64(self) -> bool {
+        self != ShaderReal::F32
+    }
+    fn prelude(self) -> &'static str {
+        match self {
+            ShaderReal::F32 => include_str!("../../shaders/common/real_f32.wgsl"),
+            ShaderReal::F32ExactCbrt => {
+                include_str!("../../shaders/common/real_f32_exact_cbrt.wgsl")
+            }
+            ShaderReal::F64 => include_str!("../../shaders/common/real_f64.wgsl"),
+        }
+    }
+}
 /// Shared functions and structs, in dependency order.
 const COMMON: [&str; 4] = [
     include_str!("../../shaders/common/layout.wgsl"),
@@ -55,10 +82,12 @@ impl Kernel {
     }
 }
 
-/// The complete WGSL of `kernel` in f32 (`f64 = false`) or f64.
-pub fn kernel_source(kernel: Kernel, f64: bool) -> String {
+/// The complete WGSL of `kernel` with scalar `real`.
+pub fn kernel_source(kernel: Kernel, real: ShaderReal) -> String {
     let mut s = String::new();
-    s.push_str(if f64 { REAL_F64 } else { REAL_F32 });
+    s.push_str(CBRT);
+    s.push('\n');
+    s.push_str(real.prelude());
     s.push('\n');
     s.push_str(&crate::gpu::layout::wgsl_constants());
     for c in COMMON {

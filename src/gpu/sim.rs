@@ -22,7 +22,7 @@
 use crate::error::{Error, Result};
 use crate::gpu::context::GpuContext;
 use crate::gpu::layout::*;
-use crate::gpu::shaders::{kernel_source, Kernel};
+use crate::gpu::shaders::{kernel_source, Kernel, ShaderReal};
 use crate::material::saliva::{breaking_point, moisture, BreakingRule};
 use crate::problem::Problem;
 use crate::real::Real;
@@ -37,6 +37,14 @@ use wgpu::util::DeviceExt;
 /// A stepping scalar the kernels exist for.
 pub trait GpuReal: Real + bytemuck::Pod {
     const IS_F64: bool;
+    /// The kernels' scalar on an adapter with (`has_f64`) or without SHADER_F64.
+    fn shader_real(has_f64: bool) -> ShaderReal {
+        match (Self::IS_F64, has_f64) {
+            (true, _) => ShaderReal::F64,
+            (false, true) => ShaderReal::F32ExactCbrt,
+            (false, false) => ShaderReal::F32,
+        }
+    }
 }
 impl GpuReal for f32 {
     const IS_F64: bool = false;
@@ -81,12 +89,14 @@ pub struct GpuSimulation<T: GpuReal> {
     node: Kernels,
     u_bufs: [wgpu::Buffer; 3],
     table: wgpu::Buffer,
+    curves: wgpu::Buffer,
     step_info: wgpu::Buffer,
     status: wgpu::Buffer,
     sal_prev: wgpu::Buffer,
     sal_state: wgpu::Buffer,
     sal_q: wgpu::Buffer,
     step_stride: u64,
+    real: ShaderReal,
     params: Params,
     imposed: Vec<Imposed>,
     step: usize,
@@ -135,7 +145,7 @@ pub(crate) fn build_kernel(
     ctx: &GpuContext,
     kernel: Kernel,
     entry: &str,
-    f64: bool,
+    real: ShaderReal,
     kinds: &[Bind],
     sets: &[Vec<&wgpu::Buffer>],
 ) -> Result<(wgpu::ComputePipeline, Vec<wgpu::BindGroup>)> {
@@ -143,7 +153,7 @@ pub(crate) fn build_kernel(
     ctx.scoped(&format!("building kernel `{entry}`"), || {
         let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(kernel.name()),
-            source: wgpu::ShaderSource::Wgsl(kernel_source(kernel, f64).into()),
+            source: wgpu::ShaderSource::Wgsl(kernel_source(kernel, real).into()),
         });
         let bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some(entry),
@@ -245,6 +255,16 @@ fn map_and_read(
     Ok(out)
 }
 
+/// Load magnitudes or curve values in the kernels' `load_real` (f64 wherever the kernels
+/// may use f64, so that each load entry is the f64 product rounded once, as on the CPU).
+fn load_bytes(v: &[f64], real: ShaderReal) -> Vec<u8> {
+    if real.needs_f64() {
+        bytes_of_slice(v)
+    } else {
+        bytes_of_slice(&v.iter().map(|&x| x as f32).collect::<Vec<f32>>())
+    }
+}
+
 /// One buffer list per rotation of the displacement buffers.
 fn three<'a>(f: impl Fn(usize) -> Vec<&'a wgpu::Buffer>) -> Vec<Vec<&'a wgpu::Buffer>> {
     (0..3).map(f).collect()
@@ -267,11 +287,24 @@ impl<T: GpuReal> GpuSimulation<T> {
 
     /// As [`GpuSimulation::new`] on a given device.
     pub fn with_context(ctx: GpuContext, problem: &Problem) -> Result<Self> {
+        let real = T::shader_real(ctx.has_f64);
+        Self::with_shader_real(ctx, problem, real)
+    }
+
+    /// As [`GpuSimulation::with_context`] with the kernels' scalar chosen (e.g. the f32-only
+    /// cube root on an adapter that has f64, to test what adapters without f64 run).
+    pub fn with_shader_real(ctx: GpuContext, problem: &Problem, real: ShaderReal) -> Result<Self> {
         problem.validate()?;
-        if T::IS_F64 && !ctx.has_f64 {
+        if real.needs_f64() && !ctx.has_f64 {
             return Err(Error::Gpu(format!(
                 "{} has no SHADER_F64: use --precision f32 with the GPU backend",
                 ctx.describe()
+            )));
+        }
+        if T::IS_F64 != (real == ShaderReal::F64) {
+            return Err(Error::Gpu(format!(
+                "kernels in {real:?} cannot step a {} simulation",
+                T::NAME
             )));
         }
         let disc = Discretisation::new(problem);
@@ -293,14 +326,14 @@ impl<T: GpuReal> GpuSimulation<T> {
         let mut node_a = cd.a.clone();
         node_a.push(cd.c1);
         // loads: per node, in the CPU's accumulation order (group, then entry)
-        let mut per_node: Vec<Vec<(u32, T)>> = vec![Vec::new(); nn];
+        let mut per_node: Vec<Vec<(u32, f64)>> = vec![Vec::new(); nn];
         for (g, grp) in disc.loads.iter().enumerate() {
             for &(dof, v) in &grp.entries {
-                per_node[dof as usize / 3].push(((dof % 3) | ((g as u32) << 2), T::from_f64(v)));
+                per_node[dof as usize / 3].push(((dof % 3) | ((g as u32) << 2), v));
             }
         }
         let mut load_key: Vec<u32> = Vec::with_capacity(nn + 1);
-        let mut load_val: Vec<T> = Vec::new();
+        let mut load_val: Vec<f64> = Vec::new();
         let mut keys = Vec::new();
         load_key.push(0);
         for list in &per_node {
@@ -357,22 +390,22 @@ impl<T: GpuReal> GpuSimulation<T> {
             .collect();
 
         let n_loads = disc.loads.len();
-        let stride = (n_loads + imposed.len() + ns).max(1);
+        let stride = (imposed.len() + ns).max(1);
         let params = Params {
             num_elements: ne as u32,
             num_nodes: nn as u32,
             num_saliva: ns as u32,
             table_stride: stride as u32,
-            imposed_base: n_loads as u32,
-            saliva_base: (n_loads + imposed.len()) as u32,
+            imposed_base: 0,
+            saliva_base: imposed.len() as u32,
+            num_loads: n_loads as u32,
             _pad0: 0,
-            _pad1: 0,
         };
         let step_stride = (ctx.limits.min_uniform_buffer_offset_alignment as u64)
             .max(std::mem::size_of::<StepInfo>() as u64);
 
         // ---- limits: refuse what the adapter cannot bind rather than fail inside wgpu
-        let max_bind = ctx.limits.max_storage_buffer_binding_size as u64;
+        let max_bind = ctx.limits.max_storage_buffer_binding_size;
         let biggest = [
             (gamma.len() * std::mem::size_of::<T>(), "hourglass vectors"),
             (
@@ -451,7 +484,12 @@ impl<T: GpuReal> GpuSimulation<T> {
                 storage("gather", bytes_of_slice(&gather), none),
                 storage("node_a", bytes_of_slice(&node_a), none),
                 storage("load_key", bytes_of_slice(&load_key), none),
-                storage("load_val", bytes_of_slice(&load_val), none),
+                storage("load_val", load_bytes(&load_val, real), none),
+                storage(
+                    "curves",
+                    load_bytes(&vec![0.0; MAX_BATCH * n_loads.max(1)], real),
+                    wgpu::BufferUsages::COPY_DST,
+                ),
                 storage("dof_slot", bytes_of_slice(&dof_slot), none),
                 [
                     storage("sal_meta", bytes_of_slice(&sal_meta), none),
@@ -460,7 +498,7 @@ impl<T: GpuReal> GpuSimulation<T> {
                     storage("sal_prev", bytes_of_slice(&vec![T::ZERO; 24 * ns]), rw),
                     storage(
                         "sal_state",
-                        bytes_of_slice(&vec![0u32, NEVER].repeat(ns)),
+                        bytes_of_slice(&[0u32, NEVER].repeat(ns)),
                         rw,
                     ),
                     storage("sal_q", bytes_of_slice(&vec![T::ONE; ns]), rw),
@@ -482,6 +520,7 @@ impl<T: GpuReal> GpuSimulation<T> {
             node_a_b,
             load_key_b,
             load_val_b,
+            curves,
             dof_slot_b,
             sal,
         ) = bufs;
@@ -492,7 +531,7 @@ impl<T: GpuReal> GpuSimulation<T> {
             &ctx,
             Kernel::ElementForces,
             "element_forces",
-            T::IS_F64,
+            real,
             &[
                 Uniform, UniformDyn, Read, Read, Read, Read, Read, ReadWrite, ReadWrite,
             ],
@@ -515,7 +554,7 @@ impl<T: GpuReal> GpuSimulation<T> {
                 &ctx,
                 Kernel::SalivaForces,
                 "saliva_forces",
-                T::IS_F64,
+                real,
                 &[
                     Uniform, UniformDyn, Read, Read, Read, ReadWrite, ReadWrite, Read, Read, Read,
                     Read, ReadWrite, ReadWrite, ReadWrite,
@@ -551,10 +590,10 @@ impl<T: GpuReal> GpuSimulation<T> {
             &ctx,
             Kernel::NodeUpdate,
             "node_update",
-            T::IS_F64,
+            real,
             &[
                 Uniform, UniformDyn, Read, Read, ReadWrite, Read, Read, Read, Read, Read, Read,
-                Read, ReadWrite,
+                Read, ReadWrite, Read,
             ],
             &three(|r| {
                 let (u, up, un) = rot(r);
@@ -572,6 +611,7 @@ impl<T: GpuReal> GpuSimulation<T> {
                     &table,
                     &dof_slot_b,
                     &status,
+                    &curves,
                 ]
             }),
         )?;
@@ -591,12 +631,14 @@ impl<T: GpuReal> GpuSimulation<T> {
             },
             u_bufs,
             table,
+            curves,
             step_info,
             status,
             sal_prev,
             sal_state,
             sal_q,
             step_stride,
+            real,
             params,
             imposed,
             step: 0,
@@ -615,6 +657,10 @@ impl<T: GpuReal> GpuSimulation<T> {
 
     pub fn context(&self) -> &GpuContext {
         &self.ctx
+    }
+    /// The kernels' scalar (and cube root).
+    pub fn shader_real(&self) -> ShaderReal {
+        self.real
     }
     /// Iterations executed so far.
     pub fn step_index(&self) -> usize {
@@ -647,18 +693,22 @@ impl<T: GpuReal> GpuSimulation<T> {
         (s as f64 * self.dt, !self.niftysim_timing)
     }
 
+    /// The load-curve values of step `s` (at `t_s`; NiftySim's lag: zero at `s = 0`),
+    /// as `Simulation::assemble_external` evaluates them.
+    fn curve_row(&self, s: usize, out: &mut Vec<f64>) {
+        let (t, clamp) = self.constraint_time(s);
+        for grp in &self.disc.loads {
+            out.push(if self.niftysim_timing && s == 0 {
+                0.0
+            } else {
+                grp.curve.value(t, clamp)
+            });
+        }
+    }
+
     /// Row of the per-step table for step `s` (see the module documentation).
     fn table_row(&self, s: usize, row: &mut [T]) {
         let p = &self.params;
-        // external loads at t_s (NiftySim's lag: zero at s = 0)
-        let (t, clamp) = self.constraint_time(s);
-        for (g, grp) in self.disc.loads.iter().enumerate() {
-            row[g] = if self.niftysim_timing && s == 0 {
-                T::ZERO
-            } else {
-                T::from_f64(grp.curve.value(t, clamp))
-            };
-        }
         // imposed values at t_{s+1}, exactly as apply_constraints computes them
         let (tn, clamp_n) = self.constraint_time(s + 1);
         let c = &self.disc.constraints;
@@ -735,9 +785,11 @@ impl<T: GpuReal> GpuSimulation<T> {
         let stride = self.params.table_stride as usize;
         let mut table = vec![T::ZERO; n * stride];
         let mut info = vec![0u8; n * self.step_stride as usize];
+        let mut curves = Vec::with_capacity(n * self.disc.loads.len());
         for j in 0..n {
             let s = self.step + j;
             self.table_row(s, &mut table[j * stride..(j + 1) * stride]);
+            self.curve_row(s, &mut curves);
             let si = StepInfo {
                 step: s as u32,
                 row: j as u32,
@@ -749,6 +801,9 @@ impl<T: GpuReal> GpuSimulation<T> {
         }
         let q = &self.ctx.queue;
         q.write_buffer(&self.table, 0, bytemuck::cast_slice(&table));
+        if !curves.is_empty() {
+            q.write_buffer(&self.curves, 0, &load_bytes(&curves, self.real));
+        }
         q.write_buffer(&self.step_info, 0, &info);
         let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("status read back"),
@@ -831,6 +886,8 @@ impl<T: GpuReal> GpuSimulation<T> {
         let stride = self.params.table_stride as usize;
         let mut row = vec![T::ZERO; stride];
         self.table_row(self.step, &mut row);
+        let mut curves = Vec::new();
+        self.curve_row(self.step, &mut curves);
         let si = StepInfo {
             step: self.step as u32,
             row: 0,
@@ -839,6 +896,9 @@ impl<T: GpuReal> GpuSimulation<T> {
         };
         let q = &self.ctx.queue;
         q.write_buffer(&self.table, 0, bytemuck::cast_slice(&row));
+        if !curves.is_empty() {
+            q.write_buffer(&self.curves, 0, &load_bytes(&curves, self.real));
+        }
         q.write_buffer(&self.step_info, 0, bytemuck::bytes_of(&si));
         let k = match stage {
             Stage::ElementForces => &self.element,
@@ -1001,12 +1061,13 @@ impl<T: GpuReal> GpuSimulation<T> {
 /// each shared WGSL function with its Rust twin.
 pub fn run_function_test<T: GpuReal>(
     ctx: &GpuContext,
+    real: ShaderReal,
     entry: &str,
     input: &[T],
     records: usize,
     out_len: usize,
 ) -> Result<Vec<T>> {
-    if T::IS_F64 && !ctx.has_f64 {
+    if real.needs_f64() && !ctx.has_f64 {
         return Err(Error::Gpu(format!("{} has no SHADER_F64", ctx.describe())));
     }
     let d = &ctx.device;
@@ -1032,7 +1093,7 @@ pub fn run_function_test<T: GpuReal>(
         ctx,
         Kernel::FunctionTests,
         entry,
-        T::IS_F64,
+        real,
         &[Bind::Read, Bind::ReadWrite, Bind::Uniform],
         &[vec![&inp, &out, &count]],
     )?;
