@@ -14,10 +14,18 @@
 //! batch; the state is read back when asked for ([`GpuSimulation::sync`]).
 //!
 //! Everything that depends on time only is evaluated in f64 by Rust for each step of a
-//! batch and uploaded as a per-step table (the load-curve value of every load group, the
-//! imposed value of every prescribed or rotated DOF at `t_{s+1}`, and the breaking point
-//! `Z` of every saliva element, eqs. 6-7): the WGSL has no load-shape, rotation or
-//! moisture code and uses exactly the CPU's values.
+//! batch and uploaded: a per-step table of stepping scalars (the imposed value of every
+//! prescribed or rotated DOF at `t_{s+1}`, and the breaking point `Z` of every saliva
+//! element, eqs. 6-7) and a per-step row of load-curve values (in f64 wherever the kernels
+//! may use f64, so that each load entry is the f64 product rounded once, as on the CPU).
+//! The WGSL has no load-shape, rotation or moisture code and uses exactly the CPU's values.
+//!
+//! Precision: with `SHADER_F64` on the adapter, the f32 kernels ([`ShaderReal::F32ExactCbrt`])
+//! return the CPU's f32 bits (verified on lavapipe: whole runs identical); without it
+//! ([`ShaderReal::F32`]) the cube root is within one ulp and the loads are formed in f32, and
+//! runs differ from the CPU's at the level of f32 round-off (`verification/gpu.rs` states
+//! the bound). f64 kernels need `SHADER_F64`; their cube root is within about one f64 ulp of
+//! the CPU's.
 
 use crate::error::{Error, Result};
 use crate::gpu::context::GpuContext;
@@ -307,6 +315,13 @@ impl<T: GpuReal> GpuSimulation<T> {
                 T::NAME
             )));
         }
+        if problem.num_steps() >= NEVER as usize {
+            return Err(Error::Gpu(format!(
+                "{} steps: the GPU path counts steps in 32 bits (at most {})",
+                problem.num_steps(),
+                NEVER - 1
+            )));
+        }
         let disc = Discretisation::new(problem);
         let nn = disc.num_nodes;
         let ne = disc.num_elements();
@@ -496,11 +511,7 @@ impl<T: GpuReal> GpuSimulation<T> {
                     storage("sal_across", bytes_of_slice(&sal_across), none),
                     storage("sal_decay", bytes_of_slice(&sal_decay), none),
                     storage("sal_prev", bytes_of_slice(&vec![T::ZERO; 24 * ns]), rw),
-                    storage(
-                        "sal_state",
-                        bytes_of_slice(&[0u32, NEVER].repeat(ns)),
-                        rw,
-                    ),
+                    storage("sal_state", bytes_of_slice(&[0u32, NEVER].repeat(ns)), rw),
                     storage("sal_q", bytes_of_slice(&vec![T::ONE; ns]), rw),
                 ],
             )
