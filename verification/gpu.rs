@@ -649,3 +649,38 @@ fn gpu_breaking_events_match_cpu_on_the_coarse_mouth() {
         "a breaking event moved by {worst_shift} steps"
     );
 }
+
+/// The f64 kernels (adapters with SHADER_F64) on the NiftySim models against the CPU's f64
+/// runs. The cube root (f32 guess, two f64 Newton steps) is within about one f64 ulp of the
+/// CPU's, so the runs differ at the level of f64 round-off carried by the dynamics: bound
+/// 1e-12 relative (~4500 eps64, the round-off of up to 10^4 steps).
+#[test]
+fn gpu_f64_follows_cpu_f64_on_niftysim_models() {
+    let Some(probe) = adapter("gpu_f64_follows_cpu_f64_on_niftysim_models") else {
+        return;
+    };
+    if !probe.has_f64 {
+        println!(
+            "gpu_f64_follows_cpu_f64_on_niftysim_models: {} has no SHADER_F64; nothing to compare",
+            probe.describe()
+        );
+        return;
+    }
+    for name in ORACLE {
+        let p = niftysim::read(
+            &oracle_dir().join(format!("{name}.xml")),
+            GradientVariant::Centroid,
+            true,
+        )
+        .unwrap();
+        let mut cpu = Simulation::<f64>::new(&p).unwrap();
+        while !cpu.is_finished() {
+            cpu.step().unwrap();
+        }
+        let mut gpu = GpuSimulation::<f64>::with_context(GpuContext::new().unwrap(), &p).unwrap();
+        gpu.step_many(p.num_steps()).unwrap();
+        let d = rel_max_diff(&gpu.displacement_f64().unwrap(), &cpu.displacement_f64());
+        println!("{name}: GPU-f64 vs CPU-f64: U {d:.2e}");
+        assert!(d <= 1e-12, "{name}: GPU-f64 differs from CPU-f64 by {d:e}");
+    }
+}
