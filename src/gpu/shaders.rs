@@ -90,6 +90,9 @@ pub fn kernel_source(kernel: Kernel, real: ShaderReal) -> String {
     s.push_str(real.prelude());
     s.push('\n');
     s.push_str(&crate::gpu::layout::wgsl_constants());
+    if real == ShaderReal::F32ExactCbrt {
+        s.push_str(&crate::gpu::layout::wgsl_f64_constants());
+    }
     for c in COMMON {
         s.push_str(c);
         s.push('\n');
