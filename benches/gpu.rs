@@ -16,8 +16,8 @@
 //! 3414-hexahedra-class mesh, saliva included).
 //!
 //! Throughput is `Elements(N)`: "elem/s" is element-updates per second.
-//! Sizes: `STICKY_LIPS_BENCH_SIZES=1000,8000,mouth` (default `1000,8000,64000,mouth`;
-//! `512k` = 80^3 accepted). `STICKY_LIPS_BENCH_CPU=0` skips the CPU ids.
+//! Sizes: `STICKY_LIPS_BENCH_SIZES=1000,8000,mouth` (default `1000,8000,64000,mouth`, and
+//! `1000,mouth` when `cargo test` runs the benchmarks once; `512k` = 80^3 accepted). `STICKY_LIPS_BENCH_CPU=0` skips the CPU ids.
 //! Without an adapter the GPU ids are skipped with a message.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
@@ -49,8 +49,14 @@ enum Size {
 }
 
 fn sizes() -> Vec<Size> {
-    let s =
-        std::env::var("STICKY_LIPS_BENCH_SIZES").unwrap_or_else(|_| "1000,8000,64000,mouth".into());
+    // `cargo test --all-targets` runs each benchmark once as a smoke test (no `--bench`
+    // argument): the small sizes are enough there
+    let default = if std::env::args().any(|a| a == "--bench") {
+        "1000,8000,64000,mouth"
+    } else {
+        "1000,mouth"
+    };
+    let s = std::env::var("STICKY_LIPS_BENCH_SIZES").unwrap_or_else(|_| default.into());
     s.split(|c: char| c == ',' || c.is_whitespace())
         .filter(|t| !t.is_empty())
         .map(|t| {
