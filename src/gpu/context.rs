@@ -8,6 +8,7 @@
 //! binding error becomes an [`Error::Gpu`] instead of a panic.
 
 use crate::error::{Error, Result};
+use std::sync::{Arc, Mutex};
 
 /// A device and its queue, with what the adapter is.
 pub struct GpuContext {
@@ -17,6 +18,8 @@ pub struct GpuContext {
     pub limits: wgpu::Limits,
     /// Whether the device was created with `SHADER_F64`.
     pub has_f64: bool,
+    /// The first device error outside an error scope (wgpu would panic on it by default).
+    uncaptured: Arc<Mutex<Option<String>>>,
 }
 
 impl GpuContext {
@@ -40,9 +43,17 @@ impl GpuContext {
             ..Default::default()
         }))
         .map_err(|e| Error::Gpu(format!("{}: cannot create a device: {e}", info.name)))?;
+        let uncaptured = Arc::new(Mutex::new(None));
+        let sink = uncaptured.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            if let Ok(mut first) = sink.lock() {
+                first.get_or_insert_with(|| e.to_string());
+            }
+        }));
         Ok(GpuContext {
             device,
             queue,
+            uncaptured,
             has_f64: features.contains(wgpu::Features::SHADER_F64),
             info,
             limits,
@@ -55,6 +66,16 @@ impl GpuContext {
             "{} ({:?}, {:?})",
             self.info.name, self.info.backend, self.info.device_type
         )
+    }
+
+    /// `Err` with the first device error that no error scope caught, if any (checked after
+    /// every submission's wait, so a failed submission is an error, never a silent result).
+    pub fn check_uncaptured(&self) -> Result<()> {
+        let first = self.uncaptured.lock().ok().and_then(|mut e| e.take());
+        match first {
+            Some(m) => Err(Error::Gpu(format!("device error: {m}"))),
+            None => Ok(()),
+        }
     }
 
     /// Runs `f` inside validation and out-of-memory error scopes; an error caught there

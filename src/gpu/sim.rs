@@ -244,6 +244,7 @@ fn map_and_read(
     ctx.device
         .poll(wgpu::PollType::wait_indefinitely())
         .map_err(|e| Error::Gpu(format!("waiting for the device: {e}")))?;
+    ctx.check_uncaptured()?;
     rx.recv()
         .map_err(|e| Error::Gpu(format!("read back: {e}")))?
         .map_err(|e| Error::Gpu(format!("read back: {e}")))?;
@@ -932,6 +933,7 @@ impl<T: GpuReal> GpuSimulation<T> {
                 timeout: None,
             })
             .map_err(|e| Error::Gpu(format!("waiting for the device: {e}")))?;
+        self.ctx.check_uncaptured()?;
         self.synced = false;
         Ok(())
     }
