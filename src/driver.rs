@@ -6,6 +6,7 @@ use crate::io::output::{FrameWriter, SalivaFrame};
 use crate::problem::Problem;
 use crate::real::{Precision, Real};
 use crate::static_solve::{solve_equilibrium, StaticOptions};
+use crate::tled::solver::Energies;
 use crate::tled::stability::{analyse, check_time_step, StabilityReport};
 use crate::tled::Simulation;
 use std::path::PathBuf;
@@ -21,10 +22,46 @@ pub enum Progress {
     Quiet,
 }
 
+/// Where the explicit steps run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Backend {
+    /// `tled::Simulation` (rayon).
+    #[default]
+    Cpu,
+    /// `gpu::GpuSimulation` (wgpu); an error if there is no adapter or the crate was built
+    /// without the `gpu` feature.
+    Gpu,
+    /// The GPU when an adapter exists (and has `SHADER_F64` for an f64 run), else the CPU.
+    Auto,
+}
+
+impl Backend {
+    /// The backend a run with `precision` will use: `Auto` resolved by looking for an adapter.
+    pub fn resolve(self, precision: Precision) -> Backend {
+        match self {
+            Backend::Auto => {
+                #[cfg(feature = "gpu")]
+                {
+                    if let Ok(ctx) = crate::gpu::GpuContext::new() {
+                        if precision == Precision::F32 || ctx.has_f64 {
+                            return Backend::Gpu;
+                        }
+                    }
+                }
+                let _ = precision;
+                Backend::Cpu
+            }
+            b => b,
+        }
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct RunOptions {
     pub out: PathBuf,
     pub precision: Precision,
+    pub backend: Backend,
     /// Worker threads (the result is bit-identical for any count).
     pub threads: usize,
     /// Run even if the time step exceeds the critical one.
@@ -52,6 +89,8 @@ pub struct RunSummary {
     pub stepping_time: f64,
     pub element_updates_per_second: f64,
     pub precision: &'static str,
+    /// `cpu`, or `gpu: <adapter>`.
+    pub backend: String,
     pub threads: usize,
     pub num_nodes: usize,
     pub num_elements: usize,
@@ -75,18 +114,162 @@ fn pool(threads: usize) -> rayon::ThreadPool {
         .expect("thread pool")
 }
 
-/// Explicit dynamic run.
+/// What the driver needs from a time stepper: the CPU [`Simulation`] and the GPU
+/// `GpuSimulation` both provide it, so output, measures and progress are shared.
+pub trait Stepper {
+    fn disc(&self) -> &crate::tled::precompute::Discretisation;
+    fn step_index(&self) -> usize;
+    fn num_steps(&self) -> usize;
+    fn time(&self) -> f64;
+    fn num_elements(&self) -> usize;
+    fn precision_name(&self) -> &'static str;
+    /// `cpu` or `gpu: <adapter>`.
+    fn backend_name(&self) -> String;
+    /// Advances `n` steps (fewer at the end of the run).
+    fn advance(&mut self, n: usize) -> Result<()>;
+    fn displacement_f64(&mut self) -> Result<Vec<[f64; 3]>>;
+    fn energies(&mut self) -> Result<Energies>;
+    /// The saliva state of the last step (`None` without saliva elements).
+    fn saliva_frame(&mut self) -> Result<Option<SalivaFrame>>;
+    fn is_finished(&self) -> bool {
+        self.step_index() >= self.num_steps()
+    }
+}
+
+fn saliva_frame_of<T: Real>(s: &crate::tled::saliva_forces::SalivaState<T>) -> SalivaFrame {
+    SalivaFrame {
+        moisture: s.moisture.clone(),
+        z: s.z.clone(),
+        q: s.q.clone(),
+        broken: s.broken.clone(),
+        broken_at: s.broken_at.clone(),
+    }
+}
+
+impl<T: Real> Stepper for Simulation<T> {
+    fn disc(&self) -> &crate::tled::precompute::Discretisation {
+        &self.disc
+    }
+    fn step_index(&self) -> usize {
+        Simulation::step_index(self)
+    }
+    fn num_steps(&self) -> usize {
+        Simulation::num_steps(self)
+    }
+    fn time(&self) -> f64 {
+        Simulation::time(self)
+    }
+    fn num_elements(&self) -> usize {
+        Simulation::num_elements(self)
+    }
+    fn precision_name(&self) -> &'static str {
+        T::NAME
+    }
+    fn backend_name(&self) -> String {
+        "cpu".into()
+    }
+    fn advance(&mut self, n: usize) -> Result<()> {
+        for _ in 0..n.min(Simulation::num_steps(self) - Simulation::step_index(self)) {
+            self.step()?;
+        }
+        Ok(())
+    }
+    fn displacement_f64(&mut self) -> Result<Vec<[f64; 3]>> {
+        Ok(Simulation::displacement_f64(self))
+    }
+    fn energies(&mut self) -> Result<Energies> {
+        Ok(Simulation::energies(self))
+    }
+    fn saliva_frame(&mut self) -> Result<Option<SalivaFrame>> {
+        Ok((!self.disc.saliva.elements.is_empty()).then(|| saliva_frame_of(self.saliva())))
+    }
+}
+
+#[cfg(feature = "gpu")]
+impl<T: crate::gpu::GpuReal> Stepper for crate::gpu::GpuSimulation<T> {
+    fn disc(&self) -> &crate::tled::precompute::Discretisation {
+        &self.disc
+    }
+    fn step_index(&self) -> usize {
+        crate::gpu::GpuSimulation::step_index(self)
+    }
+    fn num_steps(&self) -> usize {
+        crate::gpu::GpuSimulation::num_steps(self)
+    }
+    fn time(&self) -> f64 {
+        crate::gpu::GpuSimulation::time(self)
+    }
+    fn num_elements(&self) -> usize {
+        crate::gpu::GpuSimulation::num_elements(self)
+    }
+    fn precision_name(&self) -> &'static str {
+        T::NAME
+    }
+    fn backend_name(&self) -> String {
+        format!(
+            "gpu: {}, kernels {:?}",
+            self.context().describe(),
+            self.shader_real()
+        )
+    }
+    fn advance(&mut self, n: usize) -> Result<()> {
+        self.step_many(n)
+    }
+    fn displacement_f64(&mut self) -> Result<Vec<[f64; 3]>> {
+        crate::gpu::GpuSimulation::displacement_f64(self)
+    }
+    fn energies(&mut self) -> Result<Energies> {
+        crate::gpu::GpuSimulation::energies(self)
+    }
+    fn saliva_frame(&mut self) -> Result<Option<SalivaFrame>> {
+        if self.disc.saliva.elements.is_empty() {
+            return Ok(None);
+        }
+        Ok(Some(saliva_frame_of(self.saliva()?)))
+    }
+}
+
+/// Explicit dynamic run, on the backend of `opts` (see [`Backend`]).
 pub fn run(problem: &Problem, opts: &RunOptions) -> Result<RunSummary> {
-    pool(opts.threads).install(|| match opts.precision {
-        Precision::F64 => run_typed::<f64>(problem, opts),
-        Precision::F32 => run_typed::<f32>(problem, opts),
+    pool(opts.threads).install(|| {
+        let t0 = Instant::now();
+        match (opts.backend.resolve(opts.precision), opts.precision) {
+            (Backend::Gpu, _precision) => {
+                #[cfg(feature = "gpu")]
+                {
+                    match _precision {
+                        Precision::F64 => run_with(
+                            crate::gpu::GpuSimulation::<f64>::new(problem)?,
+                            problem,
+                            opts,
+                            t0,
+                        ),
+                        Precision::F32 => run_with(
+                            crate::gpu::GpuSimulation::<f32>::new(problem)?,
+                            problem,
+                            opts,
+                            t0,
+                        ),
+                    }
+                }
+                #[cfg(not(feature = "gpu"))]
+                Err(crate::error::Error::Gpu(
+                    "this build has no GPU backend (cargo feature `gpu`)".into(),
+                ))
+            }
+            (_, Precision::F64) => run_with(Simulation::<f64>::new(problem)?, problem, opts, t0),
+            (_, Precision::F32) => run_with(Simulation::<f32>::new(problem)?, problem, opts, t0),
+        }
     })
 }
 
-fn run_typed<T: Real>(problem: &Problem, opts: &RunOptions) -> Result<RunSummary> {
-    let t0 = Instant::now();
-    let mut sim = Simulation::<T>::new(problem)?;
-    let report = analyse(problem, &sim.disc);
+fn run_with<S: Stepper>(
+    mut sim: S,
+    problem: &Problem,
+    opts: &RunOptions,
+    t0: Instant,
+) -> Result<RunSummary> {
+    let report = analyse(problem, sim.disc());
     check_time_step(problem, &report, opts.force_dt)?;
     let mut writer = FrameWriter::new(
         &opts.out,
@@ -96,40 +279,30 @@ fn run_typed<T: Real>(problem: &Problem, opts: &RunOptions) -> Result<RunSummary
     )?;
     let mut energy = EnergySeries::default();
     let mut broken = Vec::new();
-    let has_saliva = !sim.disc.saliva.elements.is_empty();
     let mut measures = problem
         .physics
         .lip_columns
         .clone()
         .map(|c| crate::measures::RunMeasures::new(c, crate::measures::OPEN_THRESHOLD));
-    let mut record = |sim: &Simulation<T>, writer: &mut FrameWriter| -> Result<()> {
-        let u = sim.displacement_f64();
+    let mut record = |sim: &mut S, writer: &mut FrameWriter| -> Result<()> {
+        let u = sim.displacement_f64()?;
+        let saliva = sim.saliva_frame()?;
+        let broken_count = saliva
+            .as_ref()
+            .map_or(0, |s| s.broken.iter().filter(|b| **b).count());
         if let Some(m) = measures.as_mut() {
-            m.push(
-                sim.time(),
-                &problem.mesh.nodes,
-                &u,
-                sim.saliva().broken_count(),
-            );
+            m.push(sim.time(), &problem.mesh.nodes, &u, broken_count);
         }
-        let e = sim.energies();
+        let e = sim.energies()?;
         energy.time.push(sim.time());
         energy.kinetic.push(e.kinetic);
         energy.strain.push(e.strain);
-        let saliva = has_saliva.then(|| {
-            let s = sim.saliva();
-            broken.push(s.broken_count());
-            SalivaFrame {
-                moisture: s.moisture.clone(),
-                z: s.z.clone(),
-                q: s.q.clone(),
-                broken: s.broken.clone(),
-                broken_at: s.broken_at.clone(),
-            }
-        });
-        writer.frame(sim.time(), &u, &sim.disc, saliva)
+        if saliva.is_some() {
+            broken.push(broken_count);
+        }
+        writer.frame(sim.time(), &u, sim.disc(), saliva)
     };
-    record(&sim, &mut writer)?;
+    record(&mut sim, &mut writer)?;
     let n = sim.num_steps();
     let bar = progress_bar(opts.progress, n as u64);
     let every = problem.time.output_every;
@@ -138,11 +311,9 @@ fn run_typed<T: Real>(problem: &Problem, opts: &RunOptions) -> Result<RunSummary
     while !sim.is_finished() {
         let ts = Instant::now();
         let chunk = every - sim.step_index() % every;
-        for _ in 0..chunk.min(n - sim.step_index()) {
-            sim.step()?;
-        }
+        sim.advance(chunk.min(n - sim.step_index()))?;
         stepping += ts.elapsed().as_secs_f64();
-        record(&sim, &mut writer)?;
+        record(&mut sim, &mut writer)?;
         if let Some(b) = &bar {
             b.set_position(sim.step_index() as u64);
         } else if opts.progress == Progress::Plain && sim.step_index() >= next_plain {
@@ -163,7 +334,8 @@ fn run_typed<T: Real>(problem: &Problem, opts: &RunOptions) -> Result<RunSummary
         stepping_time: stepping,
         element_updates_per_second: (sim.step_index() * sim.num_elements()) as f64
             / stepping.max(1e-12),
-        precision: T::NAME,
+        precision: sim.precision_name(),
+        backend: sim.backend_name(),
         threads: rayon::current_num_threads(),
         num_nodes: problem.mesh.nodes.len(),
         num_elements: problem.mesh.elements.len(),
@@ -172,7 +344,7 @@ fn run_typed<T: Real>(problem: &Problem, opts: &RunOptions) -> Result<RunSummary
         critical_time_step: report.critical_time_step,
         stability: Some(report),
         frames: writer.frames_written(),
-        saliva_elements: sim.disc.saliva.elements.len(),
+        saliva_elements: sim.disc().saliva.elements.len(),
         broken_saliva: broken,
         energy,
         newton_iterations: None,
@@ -181,7 +353,7 @@ fn run_typed<T: Real>(problem: &Problem, opts: &RunOptions) -> Result<RunSummary
     if let Some(m) = &measures {
         write_measures(&opts.out, m)?;
     }
-    writer.finish(&sim.disc, &summary)?;
+    writer.finish(sim.disc(), &summary)?;
     Ok(summary)
 }
 
@@ -242,6 +414,7 @@ pub fn equilibrium(
             stepping_time: 0.0,
             element_updates_per_second: 0.0,
             precision: "f64",
+            backend: "cpu".into(),
             threads: rayon::current_num_threads(),
             num_nodes: problem.mesh.nodes.len(),
             num_elements: problem.mesh.elements.len(),

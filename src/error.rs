@@ -43,6 +43,9 @@ pub enum Error {
     },
     /// The static solver did not converge.
     NotConverged(String),
+    /// The GPU backend is unavailable or failed (no adapter, missing feature, shader or
+    /// device error, a model too large for the adapter's limits).
+    Gpu(String),
 }
 
 pub type Result<T> = std::result::Result<T, Error>;
@@ -101,6 +104,7 @@ impl fmt::Display for Error {
                 write!(f, ": {reason}")
             }
             Error::NotConverged(m) => write!(f, "static solver did not converge: {m}"),
+            Error::Gpu(m) => write!(f, "GPU backend: {m}"),
         }
     }
 }

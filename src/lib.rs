@@ -17,6 +17,8 @@ pub mod blend;
 pub mod driver;
 pub mod element;
 pub mod error;
+#[cfg(feature = "gpu")]
+pub mod gpu;
 pub mod io;
 pub mod linalg;
 pub mod material;

@@ -282,6 +282,7 @@ fn unstable_time_step_is_refused_and_a_forced_run_stops_cleanly() {
     let mut opts = RunOptions {
         out: dir.clone(),
         precision: Precision::F64,
+        backend: sticky_lips::driver::Backend::Cpu,
         threads: 1,
         force_dt: false,
         progress: Progress::Quiet,

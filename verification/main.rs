@@ -3,6 +3,8 @@
 
 mod common;
 mod element;
+#[cfg(feature = "gpu")]
+mod gpu;
 mod inputs;
 mod muscle_jaw_blend;
 mod niftysim;

@@ -47,6 +47,7 @@ impl NeoHookean {
 }
 
 /// `C - I = H + H^T + H^T H` (twice the Green-Lagrange strain).
+/// GPU twin: `shaders/common/neo_hookean.wgsl::two_green_strain`.
 #[inline(always)]
 pub fn two_green_strain<T: Real>(h: &Mat3<T>) -> Mat3<T> {
     let mut e = [[T::ZERO; 3]; 3];
@@ -62,6 +63,7 @@ pub fn two_green_strain<T: Real>(h: &Mat3<T>) -> Mat3<T> {
 
 /// Second Piola-Kirchhoff stress `S` and `J = det F` from the displacement gradient `H`.
 /// See the module documentation for the formula.
+/// GPU twin: `shaders/common/neo_hookean.wgsl::pk2_stress` (`verification/gpu.rs`).
 #[allow(non_snake_case)]
 #[inline(always)]
 pub fn pk2_stress<T: Real>(h: &Mat3<T>, mu: T, bulk: T) -> (Mat3<T>, T) {

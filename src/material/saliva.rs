@@ -155,6 +155,7 @@ pub fn breaking_point(moisture: f64, critical: f64, k_glue: f64) -> f64 {
 ///
 /// Computed as `1 + (2 y.Hy + |Hy|^2)` so small stretches keep their precision in `f32`.
 /// Verified by `verification/saliva.rs::stretch_eqs_8_10`.
+/// GPU twin: `shaders/common/saliva.wgsl::stretch_across` (`verification/gpu.rs`).
 #[inline(always)]
 pub fn stretch_across<T: Real>(h: &Mat3<T>, y: &[T; 3]) -> T {
     let hy = crate::linalg::mat_vec(h, y);
@@ -184,6 +185,7 @@ pub enum BreakingRule {
 /// is updated. `decay` is the factor per step (0.99 in the paper). `broken` is the latched
 /// state (only read by `Latched`). Returns whether the element is broken at this step.
 /// Verified by `verification/saliva.rs::force_rule_eq11_*`.
+/// GPU twin: `shaders/common/saliva.wgsl::apply_breaking_rule` (`verification/gpu.rs`).
 #[inline(always)]
 pub fn apply_breaking_rule<T: Real>(
     q: T,

@@ -1,7 +1,7 @@
 //! `sticky-lips`: the command line.
 //!
 //! ```text
-//! sticky-lips run <scenario.toml | model.xml> --out DIR [--precision f64|f32] [--threads N] [--niftysim-compat]
+//! sticky-lips run <scenario.toml | model.xml> --out DIR [--precision f64|f32] [--backend cpu|gpu|auto] [--threads N] [--niftysim-compat]
 //! sticky-lips equilibrium <scenario.toml | model.xml> --out DIR
 //! sticky-lips check <scenario.toml | model.xml>
 //! ```
@@ -12,7 +12,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use sticky_lips::driver::{self, Progress, RunOptions};
+use sticky_lips::driver::{self, Backend, Progress, RunOptions};
 use sticky_lips::element::hex8::GradientVariant;
 use sticky_lips::io::{niftysim, scenario};
 use sticky_lips::static_solve::StaticOptions;
@@ -37,6 +37,34 @@ enum PrecisionArg {
     F32,
 }
 
+impl PrecisionArg {
+    fn precision(self) -> Precision {
+        match self {
+            PrecisionArg::F64 => Precision::F64,
+            PrecisionArg::F32 => Precision::F32,
+        }
+    }
+}
+
+/// Where the explicit steps run: `cpu`, `gpu` (wgpu; an error without an adapter) or
+/// `auto` (the GPU when an adapter exists, else the CPU).
+#[derive(Clone, Copy, ValueEnum)]
+enum BackendArg {
+    Cpu,
+    Gpu,
+    Auto,
+}
+
+impl BackendArg {
+    fn backend(self) -> Backend {
+        match self {
+            BackendArg::Cpu => Backend::Cpu,
+            BackendArg::Gpu => Backend::Gpu,
+            BackendArg::Auto => Backend::Auto,
+        }
+    }
+}
+
 #[derive(clap::Args)]
 struct InputArgs {
     /// A scenario (.toml) or a NiftySim model (.xml).
@@ -57,6 +85,9 @@ enum Command {
         out: Option<PathBuf>,
         #[arg(long, value_enum, default_value = "f64")]
         precision: PrecisionArg,
+        /// Where the steps run (the GPU runs f32 everywhere, f64 where the adapter has SHADER_F64).
+        #[arg(long, value_enum, default_value = "cpu")]
+        backend: BackendArg,
         /// Worker threads (results are bit-identical for any count).
         #[arg(long, default_value_t = 1)]
         threads: usize,
@@ -158,6 +189,11 @@ enum Command {
         quick: bool,
         #[arg(long, default_value_t = 2)]
         threads: usize,
+        /// Where the runs step (see `run --backend`).
+        #[arg(long, value_enum, default_value = "cpu")]
+        backend: BackendArg,
+        #[arg(long, value_enum, default_value = "f64")]
+        precision: PrecisionArg,
         /// Reuse complete runs in OUT/runs and only redraw the figures.
         #[arg(long)]
         reuse: bool,
@@ -241,6 +277,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             input,
             out,
             precision,
+            backend,
             threads,
             force_dt,
             quiet,
@@ -254,20 +291,17 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             } else {
                 Progress::Plain
             };
-            let precision = match precision {
-                PrecisionArg::F64 => Precision::F64,
-                PrecisionArg::F32 => Precision::F32,
-            };
             let opts = RunOptions {
                 out: out.clone(),
-                precision,
+                precision: precision.precision(),
+                backend: backend.backend(),
                 threads,
                 force_dt,
                 progress,
             };
             let s = driver::run(&p, &opts)?;
             println!(
-                "{}: {} steps, t = {:.6} s, {} frames in {}; wall {:.3} s, {:.3e} element-updates/s ({}, {} thread{})",
+                "{}: {} steps, t = {:.6} s, {} frames in {}; wall {:.3} s, {:.3e} element-updates/s ({}, {}, {} thread{})",
                 p.source,
                 s.steps,
                 s.simulated_time,
@@ -276,6 +310,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                 s.wall_time,
                 s.element_updates_per_second,
                 s.precision,
+                s.backend,
                 s.threads,
                 if s.threads == 1 { "" } else { "s" }
             );
@@ -291,6 +326,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             let opts = RunOptions {
                 out: out.clone(),
                 precision: Precision::F64,
+                backend: Backend::Cpu,
                 threads,
                 force_dt: false,
                 progress: Progress::Quiet,
@@ -337,6 +373,8 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             scenarios,
             quick,
             threads,
+            backend,
+            precision,
             reuse,
         } => {
             let progress = if std::io::stderr().is_terminal() {
@@ -349,6 +387,8 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                 scenarios,
                 quick,
                 threads,
+                backend: backend.backend(),
+                precision: precision.precision(),
                 progress,
                 reuse,
             })?;

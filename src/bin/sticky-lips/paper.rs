@@ -6,7 +6,7 @@
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use sticky_lips::driver::{self, Progress, RunOptions};
+use sticky_lips::driver::{self, Backend, Progress, RunOptions};
 use sticky_lips::error::{Error, Location, Result};
 use sticky_lips::io::scenario;
 use sticky_lips::io::vtu::read_point_data_f64;
@@ -34,6 +34,8 @@ pub struct PaperOptions {
     pub scenarios: PathBuf,
     pub quick: bool,
     pub threads: usize,
+    pub backend: Backend,
+    pub precision: Precision,
     pub progress: Progress,
     /// Reuse a run whose outputs are already complete (same scenario, same step count): only
     /// the figures are redrawn.
@@ -149,7 +151,8 @@ fn run_one(
     let dir = opts.out.join("runs").join(name);
     let ro = RunOptions {
         out: dir.clone(),
-        precision: Precision::F64,
+        precision: opts.precision,
+        backend: opts.backend,
         threads: opts.threads,
         force_dt: false,
         progress: opts.progress,

@@ -1,0 +1,253 @@
+//! Criterion benchmarks of the GPU backend against the CPU (see `benches/GPU.md`).
+//!
+//! Ids are `STAGE/BACKEND-PRECISION/hex=N` (`hex=mouth` for the paper's mouth model):
+//!
+//! - `element_forces/gpu-f32`: the `element_forces` kernel alone, dispatched repeatedly at
+//!   a fixed deformed state in one submission;
+//! - `node_update/gpu-f32`: the `node_update` kernel alone, likewise;
+//! - `step/gpu-f32`: full steps (`GpuSimulation::step_many`: element forces, saliva rule if
+//!   any, node update; one submission per call, the status read back at the end);
+//! - `step/cpu-f32` and `step/cpu-f64`: `Simulation::step` on all cores (rayon), the same
+//!   model and state, for comparison.
+//!
+//! The block model is the one of `benches/tled.rs` (NiftySim's `timing_block20` scaled to
+//! `N = n^3` hexahedra, base fixed, top driven down by a clamped RAMP), seeded with the same
+//! deformed state. The mouth is `paper/scenarios/fig4_sticky.toml` at full resolution (its
+//! 3414-hexahedra-class mesh, saliva included).
+//!
+//! Throughput is `Elements(N)`: "elem/s" is element-updates per second.
+//! Sizes: `STICKY_LIPS_BENCH_SIZES=1000,8000,mouth` (default `1000,8000,64000,mouth`, and
+//! `1000,mouth` when `cargo test` runs the benchmarks once; `512k` = 80^3 accepted). `STICKY_LIPS_BENCH_CPU=0` skips the CPU ids.
+//! Without an adapter the GPU ids are skipped with a message.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use std::time::{Duration, Instant};
+use sticky_lips::element::hex8::GradientVariant;
+use sticky_lips::gpu::sim::Stage;
+use sticky_lips::gpu::{GpuContext, GpuSimulation};
+use sticky_lips::material::NeoHookean;
+use sticky_lips::mesh::generate::block;
+use sticky_lips::problem::{MaterialSpec, Numerics, TimeSettings};
+use sticky_lips::tled::boundary::{
+    BoundaryConditions, Fixed, LoadCurve, LoadShape, PrescribedDisplacement,
+};
+use sticky_lips::tled::stability::element_estimates;
+use sticky_lips::tled::Simulation;
+use sticky_lips::{Problem, Real};
+
+const SIDE: f64 = 0.04;
+const TOP_DISP: f64 = -0.004;
+const RAMP_TIME: f64 = 0.1;
+const DT: f64 = 1e-4;
+const DAMPING: f64 = 50.0;
+const SEED_STEPS: usize = 5;
+
+#[derive(Clone, Copy)]
+enum Size {
+    Block(usize),
+    Mouth,
+}
+
+fn sizes() -> Vec<Size> {
+    // `cargo test --all-targets` runs each benchmark once as a smoke test (no `--bench`
+    // argument): the small sizes are enough there
+    let default = if std::env::args().any(|a| a == "--bench") {
+        "1000,8000,64000,mouth"
+    } else {
+        "1000,mouth"
+    };
+    let s = std::env::var("STICKY_LIPS_BENCH_SIZES").unwrap_or_else(|_| default.into());
+    s.split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|t| !t.is_empty())
+        .map(|t| {
+            if t == "mouth" {
+                return Size::Mouth;
+            }
+            let (num, mul) = match t.strip_suffix(['k', 'K']) {
+                Some(n) => (n, 1000),
+                None => (t, 1),
+            };
+            let n = num
+                .parse::<usize>()
+                .unwrap_or_else(|_| panic!("STICKY_LIPS_BENCH_SIZES: cannot parse {t:?}"))
+                * mul;
+            let c = (n as f64).cbrt().round() as usize;
+            assert!(c * c * c == n, "STICKY_LIPS_BENCH_SIZES: {n} is not a cube");
+            Size::Block(c)
+        })
+        .collect()
+}
+
+/// `benches/tled.rs`'s block, run for a very long time (the top holds after the ramp) so
+/// that criterion can step it as often as it likes.
+fn block_problem(c: usize) -> Problem {
+    let mesh = block([0.0; 3], [SIDE; 3], [c, c, c]);
+    let ne = mesh.elements.len();
+    let base = mesh.node_sets["z_min"].clone();
+    let top = mesh.node_sets["z_max"].clone();
+    let ntop = top.len();
+    let bc = BoundaryConditions {
+        fixed: vec![Fixed {
+            nodes: base,
+            dofs: [true; 3],
+        }],
+        displacements: vec![PrescribedDisplacement {
+            nodes: top,
+            dof: 2,
+            values: vec![TOP_DISP; ntop],
+            curve: LoadCurve {
+                shape: LoadShape::Ramp,
+                start: 0.0,
+                duration: RAMP_TIME,
+            },
+        }],
+        ..Default::default()
+    };
+    let mut p = Problem {
+        source: format!("bench block {c}^3"),
+        mesh,
+        materials: vec![MaterialSpec {
+            name: "block".into(),
+            law: NeoHookean {
+                mu: 1000.0,
+                bulk: 10000.0,
+            },
+            density: 1000.0,
+        }],
+        element_material: vec![0; ne],
+        bc,
+        time: TimeSettings {
+            dt: DT,
+            total_time: 1e4,
+            output_every: 100,
+        },
+        numerics: Numerics {
+            damping: DAMPING,
+            hourglass_kappa: 0.075,
+            variant: GradientVariant::Centroid,
+            niftysim_timing: false,
+        },
+        additive_constraints: false,
+        physics: Default::default(),
+    };
+    let est = element_estimates(&p)
+        .into_iter()
+        .fold(f64::INFINITY, f64::min);
+    p.time.dt = DT.min(0.8 * est);
+    p
+}
+
+fn mouth_problem() -> Problem {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("paper/scenarios/fig4_sticky.toml");
+    let mut p = sticky_lips::io::scenario::read_with_overrides(
+        &path,
+        &[("time.total", toml::Value::Float(100.0))],
+    )
+    .expect("mouth scenario")
+    .problem;
+    p.source = "mouth".into();
+    p
+}
+
+fn seed_displacement(p: &Problem) -> Vec<[f64; 3]> {
+    let h = 0.5 * SIDE;
+    p.mesh
+        .nodes
+        .iter()
+        .map(|x| {
+            let s = (std::f64::consts::PI * x[2] / SIDE).sin();
+            [
+                0.05 * (x[0] - h) * s,
+                0.05 * (x[1] - h) * s,
+                -0.02 * SIDE * s * (x[2] / SIDE),
+            ]
+        })
+        .collect()
+}
+
+fn bench_cpu<T: Real>(c: &mut Criterion, p: &Problem, label: &str, seeded: bool) {
+    let mut sim = Simulation::<T>::new(p).expect("valid bench problem");
+    if seeded {
+        let u0 = seed_displacement(p);
+        sim.set_state(&u0, &u0);
+    }
+    for _ in 0..SEED_STEPS {
+        sim.step().expect("stable");
+    }
+    let ne = p.mesh.elements.len() as u64;
+    let mut g = c.benchmark_group("step");
+    g.throughput(Throughput::Elements(ne));
+    g.bench_function(BenchmarkId::new(format!("cpu-{}", T::NAME), label), |b| {
+        b.iter_custom(|iters| {
+            let t = Instant::now();
+            for _ in 0..iters {
+                sim.step().expect("stable");
+            }
+            t.elapsed()
+        })
+    });
+    g.finish();
+}
+
+fn bench_gpu(c: &mut Criterion, p: &Problem, label: &str, seeded: bool) {
+    let ctx = match GpuContext::new() {
+        Ok(ctx) => ctx,
+        Err(e) => {
+            eprintln!("SKIPPED gpu benchmarks for {label}: {e}");
+            return;
+        }
+    };
+    eprintln!("gpu benchmarks on {}", ctx.describe());
+    let mut sim = GpuSimulation::<f32>::with_context(ctx, p).expect("GPU simulation");
+    if seeded {
+        let u0 = seed_displacement(p);
+        sim.set_state(&u0, &u0);
+    }
+    sim.step_many(SEED_STEPS).expect("stable");
+    let ne = p.mesh.elements.len() as u64;
+    for (name, stage) in [
+        ("element_forces", Some(Stage::ElementForces)),
+        ("node_update", Some(Stage::NodeUpdate)),
+        ("step", None),
+    ] {
+        let mut g = c.benchmark_group(name);
+        g.throughput(Throughput::Elements(ne));
+        g.bench_function(BenchmarkId::new("gpu-f32", label), |b| {
+            b.iter_custom(|iters| {
+                let t = Instant::now();
+                match stage {
+                    Some(s) => sim.bench_stage(s, iters as usize).expect("dispatch"),
+                    None => sim.step_many(iters as usize).expect("stable"),
+                }
+                t.elapsed()
+            })
+        });
+        g.finish();
+    }
+}
+
+fn benches(c: &mut Criterion) {
+    let cpu = std::env::var("STICKY_LIPS_BENCH_CPU").map_or(true, |v| v != "0");
+    for size in sizes() {
+        let (p, label, seeded) = match size {
+            Size::Block(n) => (block_problem(n), format!("hex={}", n * n * n), true),
+            Size::Mouth => (mouth_problem(), "hex=mouth".to_string(), false),
+        };
+        bench_gpu(c, &p, &label, seeded);
+        if cpu {
+            bench_cpu::<f32>(c, &p, &label, seeded);
+            bench_cpu::<f64>(c, &p, &label, seeded);
+        }
+    }
+}
+
+criterion_group! {
+    name = gpu;
+    config = Criterion::default()
+        .sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(3));
+    targets = benches
+}
+criterion_main!(gpu);

@@ -1,0 +1,1125 @@
+//! [`GpuSimulation`]: the TLED step of [`crate::tled::Simulation`] on a wgpu device.
+//!
+//! Same contract as the CPU simulation: [`GpuSimulation::new`] validates and precomputes
+//! (the same [`Discretisation`], the same f64 derived constants rounded once to the
+//! stepping precision), [`GpuSimulation::step_many`] advances, and on divergence returns
+//! [`Error::Diverged`] naming the step, time and element or node, with the state left as it
+//! was before the failing step.
+//!
+//! One batch of steps is one queue submission with one compute pass: for every step the
+//! `element_forces`, `saliva_forces` (if the model has saliva) and `node_update` kernels
+//! are dispatched; the displacement lives in three buffers used in rotation
+//! (`u_s = buf[s % 3]`, `u_{s-1} = buf[(s + 2) % 3]`, `u_{s+1} = buf[(s + 1) % 3]`), so
+//! nothing is copied between steps. Only the 16-byte [`Status`] is read back after a
+//! batch; the state is read back when asked for ([`GpuSimulation::sync`]).
+//!
+//! Everything that depends on time only is evaluated in f64 by Rust for each step of a
+//! batch and uploaded: a per-step table of stepping scalars (the imposed value of every
+//! prescribed or rotated DOF at `t_{s+1}`, and the breaking point `Z` of every saliva
+//! element, eqs. 6-7) and a per-step row of load-curve values (in f64 wherever the kernels
+//! may use f64, so that each load entry is the f64 product rounded once, as on the CPU).
+//! The WGSL has no load-shape, rotation or moisture code and uses exactly the CPU's values.
+//!
+//! Precision: with `SHADER_F64` on the adapter, the f32 kernels ([`ShaderReal::F32ExactCbrt`])
+//! return the CPU's f32 bits (verified on lavapipe: whole runs identical); without it
+//! ([`ShaderReal::F32`]) the cube root is within one ulp and the loads are formed in f32, and
+//! runs differ from the CPU's at the level of f32 round-off (`verification/gpu.rs` states
+//! the bound). f64 kernels need `SHADER_F64`; their cube root is within about one f64 ulp of
+//! the CPU's.
+
+use crate::error::{Error, Result};
+use crate::gpu::context::GpuContext;
+use crate::gpu::layout::*;
+use crate::gpu::shaders::{kernel_source, Kernel, ShaderReal};
+use crate::material::saliva::{breaking_point, moisture, BreakingRule};
+use crate::problem::Problem;
+use crate::real::Real;
+use crate::tled::element_forces::{element_forces, ElementArrays};
+use crate::tled::node_update::{gather_all, CentralDifference};
+use crate::tled::precompute::Discretisation;
+use crate::tled::saliva_forces::SalivaState;
+use crate::tled::solver::Energies;
+use std::num::NonZeroU64;
+use wgpu::util::DeviceExt;
+
+/// A stepping scalar the kernels exist for.
+pub trait GpuReal: Real + bytemuck::Pod {
+    const IS_F64: bool;
+    /// The kernels' scalar on an adapter with (`has_f64`) or without SHADER_F64.
+    fn shader_real(has_f64: bool) -> ShaderReal {
+        match (Self::IS_F64, has_f64) {
+            (true, _) => ShaderReal::F64,
+            (false, true) => ShaderReal::F32ExactCbrt,
+            (false, false) => ShaderReal::F32,
+        }
+    }
+}
+impl GpuReal for f32 {
+    const IS_F64: bool = false;
+}
+impl GpuReal for f64 {
+    const IS_F64: bool = true;
+}
+
+/// Steps recorded in one submission at most (the per-step table holds this many rows).
+pub const MAX_BATCH: usize = 512;
+
+/// A stage that [`GpuSimulation::bench_stage`] can dispatch alone.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    ElementForces,
+    NodeUpdate,
+}
+
+/// Where the value of an imposed slot comes from.
+#[derive(Clone, Copy, Debug)]
+enum Imposed {
+    /// Index into `constraints.prescribed_dofs`.
+    Prescribed(usize),
+    /// Rotation `r`, node `n`, component `k`.
+    Rotation(usize, u32, usize),
+}
+
+struct Kernels {
+    pipeline: wgpu::ComputePipeline,
+    /// One bind group per rotation of the displacement buffers (`s % 3`).
+    groups: Vec<wgpu::BindGroup>,
+    workgroups: u32,
+}
+
+pub struct GpuSimulation<T: GpuReal> {
+    pub disc: Discretisation,
+    ctx: GpuContext,
+    reference: Vec<[f64; 3]>,
+    el: ElementArrays<T>,
+    element: Kernels,
+    saliva_k: Option<Kernels>,
+    node: Kernels,
+    u_bufs: [wgpu::Buffer; 3],
+    table: wgpu::Buffer,
+    curves: wgpu::Buffer,
+    step_info: wgpu::Buffer,
+    status: wgpu::Buffer,
+    sal_prev: wgpu::Buffer,
+    sal_state: wgpu::Buffer,
+    sal_q: wgpu::Buffer,
+    step_stride: u64,
+    real: ShaderReal,
+    params: Params,
+    imposed: Vec<Imposed>,
+    step: usize,
+    num_steps: usize,
+    dt: f64,
+    total_time: f64,
+    niftysim_timing: bool,
+    u: Vec<[T; 3]>,
+    u_prev: Vec<[T; 3]>,
+    saliva: SalivaState<T>,
+    synced: bool,
+}
+
+#[derive(Clone, Copy)]
+pub(crate) enum Bind {
+    Uniform,
+    UniformDyn,
+    Read,
+    ReadWrite,
+}
+
+fn layout_entries(kinds: &[Bind]) -> Vec<wgpu::BindGroupLayoutEntry> {
+    kinds
+        .iter()
+        .enumerate()
+        .map(|(i, k)| wgpu::BindGroupLayoutEntry {
+            binding: i as u32,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: match k {
+                    Bind::Uniform | Bind::UniformDyn => wgpu::BufferBindingType::Uniform,
+                    Bind::Read => wgpu::BufferBindingType::Storage { read_only: true },
+                    Bind::ReadWrite => wgpu::BufferBindingType::Storage { read_only: false },
+                },
+                has_dynamic_offset: matches!(k, Bind::UniformDyn),
+                min_binding_size: None,
+            },
+            count: None,
+        })
+        .collect()
+}
+
+/// A compute pipeline for `kernel` with the given binding kinds, and one bind group per
+/// buffer list in `sets` (the StepInfo binding is bound at size `StepInfo` for dynamic offsets).
+pub(crate) fn build_kernel(
+    ctx: &GpuContext,
+    kernel: Kernel,
+    entry: &str,
+    real: ShaderReal,
+    kinds: &[Bind],
+    sets: &[Vec<&wgpu::Buffer>],
+) -> Result<(wgpu::ComputePipeline, Vec<wgpu::BindGroup>)> {
+    let d = &ctx.device;
+    ctx.scoped(&format!("building kernel `{entry}`"), || {
+        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(kernel.name()),
+            source: wgpu::ShaderSource::Wgsl(kernel_source(kernel, real).into()),
+        });
+        let bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(entry),
+            entries: &layout_entries(kinds),
+        });
+        let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(entry),
+            bind_group_layouts: &[Some(&bgl)],
+            immediate_size: 0,
+        });
+        let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(&pl),
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let groups = sets
+            .iter()
+            .map(|bufs| {
+                let entries: Vec<wgpu::BindGroupEntry> = bufs
+                    .iter()
+                    .zip(kinds)
+                    .enumerate()
+                    .map(|(i, (b, k))| wgpu::BindGroupEntry {
+                        binding: i as u32,
+                        resource: match k {
+                            Bind::UniformDyn => {
+                                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                                    buffer: b,
+                                    offset: 0,
+                                    size: NonZeroU64::new(std::mem::size_of::<StepInfo>() as u64),
+                                })
+                            }
+                            _ => b.as_entire_binding(),
+                        },
+                    })
+                    .collect();
+                d.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some(entry),
+                    layout: &bgl,
+                    entries: &entries,
+                })
+            })
+            .collect();
+        (pipeline, groups)
+    })
+}
+
+/// Reads buffers back (each whole) in one submission.
+pub(crate) fn read_buffers(ctx: &GpuContext, bufs: &[&wgpu::Buffer]) -> Result<Vec<Vec<u8>>> {
+    let d = &ctx.device;
+    let total: u64 = bufs.iter().map(|b| b.size()).sum();
+    let staging = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("read back"),
+        size: total.max(4),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = d.create_command_encoder(&Default::default());
+    let mut off = 0;
+    for b in bufs {
+        enc.copy_buffer_to_buffer(b, 0, &staging, off, b.size());
+        off += b.size();
+    }
+    ctx.queue.submit([enc.finish()]);
+    map_and_read(ctx, &staging, bufs.iter().map(|b| b.size()))
+}
+
+fn map_and_read(
+    ctx: &GpuContext,
+    staging: &wgpu::Buffer,
+    sizes: impl Iterator<Item = u64>,
+) -> Result<Vec<Vec<u8>>> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    staging.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    ctx.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| Error::Gpu(format!("waiting for the device: {e}")))?;
+    ctx.check_uncaptured()?;
+    rx.recv()
+        .map_err(|e| Error::Gpu(format!("read back: {e}")))?
+        .map_err(|e| Error::Gpu(format!("read back: {e}")))?;
+    let out = {
+        let view = staging
+            .get_mapped_range(..)
+            .map_err(|e| Error::Gpu(format!("read back: {e}")))?;
+        let mut out = Vec::new();
+        let mut off = 0usize;
+        for s in sizes {
+            out.push(view[off..off + s as usize].to_vec());
+            off += s as usize;
+        }
+        out
+    };
+    staging.unmap();
+    Ok(out)
+}
+
+/// Load magnitudes or curve values in the kernels' `load_real` (f64 wherever the kernels
+/// may use f64, so that each load entry is the f64 product rounded once, as on the CPU).
+fn load_bytes(v: &[f64], real: ShaderReal) -> Vec<u8> {
+    if real.needs_f64() {
+        bytes_of_slice(v)
+    } else {
+        bytes_of_slice(&v.iter().map(|&x| x as f32).collect::<Vec<f32>>())
+    }
+}
+
+/// One buffer list per rotation of the displacement buffers.
+fn three<'a>(f: impl Fn(usize) -> Vec<&'a wgpu::Buffer>) -> Vec<Vec<&'a wgpu::Buffer>> {
+    (0..3).map(f).collect()
+}
+
+fn bytes_of_slice<T: bytemuck::Pod>(v: &[T]) -> Vec<u8> {
+    let mut b = bytemuck::cast_slice::<T, u8>(v).to_vec();
+    // no zero-sized bindings, and sizes a multiple of 16
+    b.resize(b.len().max(16).div_ceil(16) * 16, 0);
+    b
+}
+
+impl<T: GpuReal> GpuSimulation<T> {
+    /// Validates the problem, precomputes, finds an adapter and uploads the model.
+    pub fn new(problem: &Problem) -> Result<Self> {
+        problem.validate()?;
+        let ctx = GpuContext::new()?;
+        Self::with_context(ctx, problem)
+    }
+
+    /// As [`GpuSimulation::new`] on a given device.
+    pub fn with_context(ctx: GpuContext, problem: &Problem) -> Result<Self> {
+        let real = T::shader_real(ctx.has_f64);
+        Self::with_shader_real(ctx, problem, real)
+    }
+
+    /// As [`GpuSimulation::with_context`] with the kernels' scalar chosen (e.g. the f32-only
+    /// cube root on an adapter that has f64, to test what adapters without f64 run).
+    pub fn with_shader_real(ctx: GpuContext, problem: &Problem, real: ShaderReal) -> Result<Self> {
+        problem.validate()?;
+        if real.needs_f64() && !ctx.has_f64 {
+            return Err(Error::Gpu(format!(
+                "{} has no SHADER_F64: use --precision f32 with the GPU backend",
+                ctx.describe()
+            )));
+        }
+        if T::IS_F64 != (real == ShaderReal::F64) {
+            return Err(Error::Gpu(format!(
+                "kernels in {real:?} cannot step a {} simulation",
+                T::NAME
+            )));
+        }
+        if problem.num_steps() >= NEVER as usize {
+            return Err(Error::Gpu(format!(
+                "{} steps: the GPU path counts steps in 32 bits (at most {})",
+                problem.num_steps(),
+                NEVER - 1
+            )));
+        }
+        let disc = Discretisation::new(problem);
+        let nn = disc.num_nodes;
+        let ne = disc.num_elements();
+        let el = ElementArrays::<T>::from_discretisation(&disc);
+        let cd = CentralDifference::<T>::new(problem.time.dt, problem.numerics.damping, &disc.mass);
+        let d = &ctx.device;
+
+        // ---- model arrays (layouts as documented at the bindings in shaders/*.wgsl)
+        let conn: Vec<u32> = el.conn.iter().flatten().copied().collect();
+        let dhdx: Vec<T> = el.dhdx.iter().flatten().flatten().copied().collect();
+        let gamma: Vec<T> = el.gamma.iter().flatten().flatten().copied().collect();
+        let escal: Vec<T> = (0..ne)
+            .flat_map(|e| [el.weight[e], el.hg_k[e], el.mu[e], el.bulk[e]])
+            .collect();
+        let mut gather = disc.gather.offsets.clone();
+        gather.extend_from_slice(&disc.gather.slots);
+        let mut node_a = cd.a.clone();
+        node_a.push(cd.c1);
+        // loads: per node, in the CPU's accumulation order (group, then entry)
+        let mut per_node: Vec<Vec<(u32, f64)>> = vec![Vec::new(); nn];
+        for (g, grp) in disc.loads.iter().enumerate() {
+            for &(dof, v) in &grp.entries {
+                per_node[dof as usize / 3].push(((dof % 3) | ((g as u32) << 2), v));
+            }
+        }
+        let mut load_key: Vec<u32> = Vec::with_capacity(nn + 1);
+        let mut load_val: Vec<f64> = Vec::new();
+        let mut keys = Vec::new();
+        load_key.push(0);
+        for list in &per_node {
+            for &(k, v) in list {
+                keys.push(k);
+                load_val.push(v);
+            }
+            load_key.push(keys.len() as u32);
+        }
+        load_key.extend(keys);
+        // constraints: what each DOF becomes after the update (rotation > prescribed > fixed,
+        // the order in which the CPU's apply_constraints overwrites)
+        let c = &disc.constraints;
+        let mut dof_slot = vec![DOF_FREE; 3 * nn];
+        for &k in &c.fixed {
+            dof_slot[k as usize] = DOF_FIXED;
+        }
+        let mut imposed = Vec::new();
+        for (i, &k) in c.prescribed_dofs.iter().enumerate() {
+            dof_slot[k as usize] = imposed.len() as u32;
+            imposed.push(Imposed::Prescribed(i));
+        }
+        for (r, rot) in c.rotations.iter().enumerate() {
+            for &n in &rot.nodes {
+                for k in 0..3 {
+                    dof_slot[3 * n as usize + k] = imposed.len() as u32;
+                    imposed.push(Imposed::Rotation(r, n, k));
+                }
+            }
+        }
+        let sp = &disc.saliva;
+        let ns = sp.elements.len();
+        let sal_meta: Vec<u32> = (0..ns)
+            .flat_map(|k| {
+                let g = sp.group[k];
+                let rule = match sp.groups[g as usize].rule {
+                    BreakingRule::Literal => RULE_LITERAL,
+                    BreakingRule::Latched => RULE_LATCHED,
+                };
+                [sp.elements[k], g, rule]
+            })
+            .collect();
+        let sal_across: Vec<T> = sp
+            .across
+            .iter()
+            .flatten()
+            .map(|&x| T::from_f64(x))
+            .collect();
+        let saliva = SalivaState::<T>::new(sp, problem.time.dt);
+        let sal_decay: Vec<T> = sp
+            .groups
+            .iter()
+            .map(|g| T::from_f64(g.decay.factor(problem.time.dt)))
+            .collect();
+
+        let n_loads = disc.loads.len();
+        let stride = (imposed.len() + ns).max(1);
+        let params = Params {
+            num_elements: ne as u32,
+            num_nodes: nn as u32,
+            num_saliva: ns as u32,
+            table_stride: stride as u32,
+            imposed_base: 0,
+            saliva_base: imposed.len() as u32,
+            num_loads: n_loads as u32,
+            _pad0: 0,
+        };
+        let step_stride = (ctx.limits.min_uniform_buffer_offset_alignment as u64)
+            .max(std::mem::size_of::<StepInfo>() as u64);
+
+        // ---- limits: refuse what the adapter cannot bind rather than fail inside wgpu
+        let max_bind = ctx.limits.max_storage_buffer_binding_size;
+        let biggest = [
+            (gamma.len() * std::mem::size_of::<T>(), "hourglass vectors"),
+            (
+                dhdx.len() * std::mem::size_of::<T>(),
+                "element force blocks",
+            ),
+            (
+                MAX_BATCH * stride * std::mem::size_of::<T>(),
+                "per-step table",
+            ),
+            (gather.len() * 4, "gather lists"),
+        ];
+        for (bytes, what) in biggest {
+            if bytes as u64 > max_bind.min(ctx.limits.max_buffer_size) {
+                return Err(Error::Gpu(format!(
+                    "the model is too large for {}: its {what} take {bytes} bytes, the adapter binds at most {max_bind}",
+                    ctx.describe()
+                )));
+            }
+        }
+        let wg = |n: usize| -> Result<u32> {
+            let g = (n as u64).div_ceil(WORKGROUP_SIZE as u64).max(1);
+            if g > ctx.limits.max_compute_workgroups_per_dimension as u64 {
+                return Err(Error::Gpu(format!(
+                    "{n} work items exceed the adapter's {} workgroups of {WORKGROUP_SIZE}",
+                    ctx.limits.max_compute_workgroups_per_dimension
+                )));
+            }
+            Ok(g as u32)
+        };
+        let (wg_e, wg_n, wg_s) = (wg(ne)?, wg(nn)?, wg(ns)?);
+
+        let bufs = ctx.scoped("uploading the model", || {
+            let storage = |label: &str, bytes: Vec<u8>, extra: wgpu::BufferUsages| {
+                d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents: &bytes,
+                    usage: wgpu::BufferUsages::STORAGE | extra,
+                })
+            };
+            let none = wgpu::BufferUsages::empty();
+            let rw = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+            let zeros = vec![T::ZERO; 3 * nn];
+            let u_bufs = [
+                storage("u0", bytes_of_slice(&zeros), rw),
+                storage("u1", bytes_of_slice(&zeros), rw),
+                storage("u2", bytes_of_slice(&zeros), rw),
+            ];
+            let params_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("params"),
+                contents: bytemuck::bytes_of(&params),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let step_info = d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("step info"),
+                size: step_stride * MAX_BATCH as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let table = storage(
+                "per-step table",
+                bytes_of_slice(&vec![T::ZERO; MAX_BATCH * stride]),
+                wgpu::BufferUsages::COPY_DST,
+            );
+            (
+                u_bufs,
+                params_buf,
+                step_info,
+                table,
+                storage("conn", bytes_of_slice(&conn), none),
+                storage("dhdx", bytes_of_slice(&dhdx), none),
+                storage("gamma", bytes_of_slice(&gamma), none),
+                storage("escal", bytes_of_slice(&escal), none),
+                storage("elem_f", bytes_of_slice(&vec![T::ZERO; 24 * ne]), none),
+                storage("status", bytes_of_slice(&[Status::OK]), rw),
+                storage("gather", bytes_of_slice(&gather), none),
+                storage("node_a", bytes_of_slice(&node_a), none),
+                storage("load_key", bytes_of_slice(&load_key), none),
+                storage("load_val", load_bytes(&load_val, real), none),
+                storage(
+                    "curves",
+                    load_bytes(&vec![0.0; MAX_BATCH * n_loads.max(1)], real),
+                    wgpu::BufferUsages::COPY_DST,
+                ),
+                storage("dof_slot", bytes_of_slice(&dof_slot), none),
+                [
+                    storage("sal_meta", bytes_of_slice(&sal_meta), none),
+                    storage("sal_across", bytes_of_slice(&sal_across), none),
+                    storage("sal_decay", bytes_of_slice(&sal_decay), none),
+                    storage("sal_prev", bytes_of_slice(&vec![T::ZERO; 24 * ns]), rw),
+                    storage("sal_state", bytes_of_slice(&[0u32, NEVER].repeat(ns)), rw),
+                    storage("sal_q", bytes_of_slice(&vec![T::ONE; ns]), rw),
+                ],
+            )
+        })?;
+        let (
+            u_bufs,
+            params_buf,
+            step_info,
+            table,
+            conn_b,
+            dhdx_b,
+            gamma_b,
+            escal_b,
+            elem_f,
+            status,
+            gather_b,
+            node_a_b,
+            load_key_b,
+            load_val_b,
+            curves,
+            dof_slot_b,
+            sal,
+        ) = bufs;
+        let [sal_meta_b, sal_across_b, sal_decay_b, sal_prev, sal_state, sal_q] = sal;
+        use Bind::*;
+        let rot = |r: usize| (&u_bufs[r], &u_bufs[(r + 2) % 3], &u_bufs[(r + 1) % 3]);
+        let (pe, ge) = build_kernel(
+            &ctx,
+            Kernel::ElementForces,
+            "element_forces",
+            real,
+            &[
+                Uniform, UniformDyn, Read, Read, Read, Read, Read, ReadWrite, ReadWrite,
+            ],
+            &three(|r| {
+                vec![
+                    &params_buf,
+                    &step_info,
+                    rot(r).0,
+                    &conn_b,
+                    &dhdx_b,
+                    &gamma_b,
+                    &escal_b,
+                    &elem_f,
+                    &status,
+                ]
+            }),
+        )?;
+        let saliva_k = if ns > 0 {
+            let (ps, gs) = build_kernel(
+                &ctx,
+                Kernel::SalivaForces,
+                "saliva_forces",
+                real,
+                &[
+                    Uniform, UniformDyn, Read, Read, Read, ReadWrite, ReadWrite, Read, Read, Read,
+                    Read, ReadWrite, ReadWrite, ReadWrite,
+                ],
+                &three(|r| {
+                    vec![
+                        &params_buf,
+                        &step_info,
+                        rot(r).0,
+                        &conn_b,
+                        &dhdx_b,
+                        &elem_f,
+                        &status,
+                        &table,
+                        &sal_meta_b,
+                        &sal_across_b,
+                        &sal_decay_b,
+                        &sal_prev,
+                        &sal_state,
+                        &sal_q,
+                    ]
+                }),
+            )?;
+            Some(Kernels {
+                pipeline: ps,
+                groups: gs,
+                workgroups: wg_s,
+            })
+        } else {
+            None
+        };
+        let (pn, gn) = build_kernel(
+            &ctx,
+            Kernel::NodeUpdate,
+            "node_update",
+            real,
+            &[
+                Uniform, UniformDyn, Read, Read, ReadWrite, Read, Read, Read, Read, Read, Read,
+                Read, ReadWrite, Read,
+            ],
+            &three(|r| {
+                let (u, up, un) = rot(r);
+                vec![
+                    &params_buf,
+                    &step_info,
+                    u,
+                    up,
+                    un,
+                    &elem_f,
+                    &gather_b,
+                    &node_a_b,
+                    &load_key_b,
+                    &load_val_b,
+                    &table,
+                    &dof_slot_b,
+                    &status,
+                    &curves,
+                ]
+            }),
+        )?;
+        Ok(GpuSimulation {
+            reference: problem.mesh.nodes.clone(),
+            el,
+            element: Kernels {
+                pipeline: pe,
+                groups: ge,
+                workgroups: wg_e,
+            },
+            saliva_k,
+            node: Kernels {
+                pipeline: pn,
+                groups: gn,
+                workgroups: wg_n,
+            },
+            u_bufs,
+            table,
+            curves,
+            step_info,
+            status,
+            sal_prev,
+            sal_state,
+            sal_q,
+            step_stride,
+            real,
+            params,
+            imposed,
+            step: 0,
+            num_steps: problem.num_steps(),
+            dt: problem.time.dt,
+            total_time: problem.time.total_time,
+            niftysim_timing: problem.numerics.niftysim_timing,
+            u: vec![[T::ZERO; 3]; nn],
+            u_prev: vec![[T::ZERO; 3]; nn],
+            saliva,
+            synced: true,
+            ctx,
+            disc,
+        })
+    }
+
+    pub fn context(&self) -> &GpuContext {
+        &self.ctx
+    }
+    /// The kernels' scalar (and cube root).
+    pub fn shader_real(&self) -> ShaderReal {
+        self.real
+    }
+    /// Iterations executed so far.
+    pub fn step_index(&self) -> usize {
+        self.step
+    }
+    /// Iterations the run executes in all.
+    pub fn num_steps(&self) -> usize {
+        self.num_steps
+    }
+    /// Time of the current displacement (s).
+    pub fn time(&self) -> f64 {
+        self.step as f64 * self.dt
+    }
+    pub fn dt(&self) -> f64 {
+        self.dt
+    }
+    pub fn total_time(&self) -> f64 {
+        self.total_time
+    }
+    pub fn is_finished(&self) -> bool {
+        self.step >= self.num_steps
+    }
+    pub fn num_elements(&self) -> usize {
+        self.el.len()
+    }
+
+    /// The time at which load curves are evaluated for index `s`, and whether to clamp
+    /// (the CPU's `Simulation::constraint_time`).
+    fn constraint_time(&self, s: usize) -> (f64, bool) {
+        (s as f64 * self.dt, !self.niftysim_timing)
+    }
+
+    /// The load-curve values of step `s` (at `t_s`; NiftySim's lag: zero at `s = 0`),
+    /// as `Simulation::assemble_external` evaluates them.
+    fn curve_row(&self, s: usize, out: &mut Vec<f64>) {
+        let (t, clamp) = self.constraint_time(s);
+        for grp in &self.disc.loads {
+            out.push(if self.niftysim_timing && s == 0 {
+                0.0
+            } else {
+                grp.curve.value(t, clamp)
+            });
+        }
+    }
+
+    /// Row of the per-step table for step `s` (see the module documentation).
+    fn table_row(&self, s: usize, row: &mut [T]) {
+        let p = &self.params;
+        // imposed values at t_{s+1}, exactly as apply_constraints computes them
+        let (tn, clamp_n) = self.constraint_time(s + 1);
+        let c = &self.disc.constraints;
+        let mut acc = vec![0.0f64; c.prescribed_dofs.len()];
+        for (curve, entries) in &c.prescribed {
+            let sc = curve.value(tn, clamp_n);
+            for &(k, v) in entries {
+                let i = c
+                    .prescribed_dofs
+                    .binary_search(&k)
+                    .expect("prescribed dof planned");
+                acc[i] += v * sc;
+            }
+        }
+        let base = p.imposed_base as usize;
+        let mut last_rot: Option<(usize, u32, [f64; 3])> = None;
+        for (i, imp) in self.imposed.iter().enumerate() {
+            row[base + i] = match *imp {
+                Imposed::Prescribed(j) => T::from_f64(acc[j]),
+                Imposed::Rotation(r, n, k) => {
+                    let du = match last_rot {
+                        Some((lr, ln, du)) if lr == r && ln == n => du,
+                        _ => {
+                            let du = c.rotations[r].displacement(
+                                &self.reference[n as usize],
+                                tn,
+                                clamp_n,
+                            );
+                            last_rot = Some((r, n, du));
+                            du
+                        }
+                    };
+                    T::from_f64(du[k])
+                }
+            };
+        }
+        // breaking points at t_s (eqs. 6-7 in f64, as saliva_forces does)
+        let sp = &self.disc.saliva;
+        if !sp.elements.is_empty() {
+            let t = s as f64 * self.dt;
+            let evaporated: Vec<f64> = sp
+                .groups
+                .iter()
+                .map(|g| g.evaporation.evaporated(t))
+                .collect();
+            let sb = p.saliva_base as usize;
+            for k in 0..sp.elements.len() {
+                let g = sp.group[k] as usize;
+                let m = moisture(sp.initial_moisture[k], evaporated[g]);
+                let prm = &sp.groups[g];
+                row[sb + k] = T::from_f64(breaking_point(m, prm.critical_moisture, prm.k_glue));
+            }
+        }
+    }
+
+    /// Advances one iteration (one submission: prefer [`GpuSimulation::step_many`]).
+    pub fn step(&mut self) -> Result<()> {
+        self.step_many(1)
+    }
+
+    /// Advances `n` iterations (fewer if the run ends first), [`MAX_BATCH`] per submission.
+    /// On divergence the state is the one before the failing step and the error names it.
+    pub fn step_many(&mut self, n: usize) -> Result<()> {
+        let mut left = n.min(self.num_steps.saturating_sub(self.step));
+        while left > 0 {
+            let b = left.min(MAX_BATCH);
+            self.batch(b)?;
+            left -= b;
+        }
+        Ok(())
+    }
+
+    fn batch(&mut self, n: usize) -> Result<()> {
+        let stride = self.params.table_stride as usize;
+        let mut table = vec![T::ZERO; n * stride];
+        let mut info = vec![0u8; n * self.step_stride as usize];
+        let mut curves = Vec::with_capacity(n * self.disc.loads.len());
+        for j in 0..n {
+            let s = self.step + j;
+            self.table_row(s, &mut table[j * stride..(j + 1) * stride]);
+            self.curve_row(s, &mut curves);
+            let si = StepInfo {
+                step: s as u32,
+                row: j as u32,
+                _pad0: 0,
+                _pad1: 0,
+            };
+            let o = j * self.step_stride as usize;
+            info[o..o + std::mem::size_of::<StepInfo>()].copy_from_slice(bytemuck::bytes_of(&si));
+        }
+        let q = &self.ctx.queue;
+        q.write_buffer(&self.table, 0, bytemuck::cast_slice(&table));
+        if !curves.is_empty() {
+            q.write_buffer(&self.curves, 0, &load_bytes(&curves, self.real));
+        }
+        q.write_buffer(&self.step_info, 0, &info);
+        let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("status read back"),
+            size: std::mem::size_of::<Status>() as u64,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = self.ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("tled steps"),
+                timestamp_writes: None,
+            });
+            for j in 0..n {
+                let r = (self.step + j) % 3;
+                let off = [(j as u64 * self.step_stride) as u32];
+                for k in [
+                    Some(&self.element),
+                    self.saliva_k.as_ref(),
+                    Some(&self.node),
+                ]
+                .into_iter()
+                .flatten()
+                {
+                    pass.set_pipeline(&k.pipeline);
+                    pass.set_bind_group(0, &k.groups[r], &off);
+                    pass.dispatch_workgroups(k.workgroups, 1, 1);
+                }
+            }
+        }
+        enc.copy_buffer_to_buffer(
+            &self.status,
+            0,
+            &staging,
+            0,
+            std::mem::size_of::<Status>() as u64,
+        );
+        q.submit([enc.finish()]);
+        let bytes = map_and_read(
+            &self.ctx,
+            &staging,
+            [std::mem::size_of::<Status>() as u64].into_iter(),
+        )?;
+        let st: Status = bytemuck::pod_read_unaligned(&bytes[0]);
+        self.synced = false;
+        if st != Status::OK {
+            let (step, element, node, reason) = if st.element_step <= st.node_step {
+                (
+                    st.element_step as usize,
+                    Some(st.element as usize),
+                    None,
+                    "element inverted or degenerate (det F <= 0 or not finite)",
+                )
+            } else {
+                (
+                    st.node_step as usize,
+                    None,
+                    Some(st.node as usize),
+                    "non-finite displacement",
+                )
+            };
+            self.step = step;
+            return Err(Error::Diverged {
+                step,
+                time: step as f64 * self.dt,
+                element,
+                node,
+                reason: reason.into(),
+            });
+        }
+        self.step += n;
+        Ok(())
+    }
+
+    /// For benchmarks: dispatches one stage `reps` times at the current step, in one pass
+    /// and one submission, and waits for it. `element_forces` rewrites the same blocks and
+    /// `node_update` the same `u_{s+1}` each time, so the state does not advance (the
+    /// saliva rule, which carries state, is not offered).
+    pub fn bench_stage(&mut self, stage: Stage, reps: usize) -> Result<()> {
+        let stride = self.params.table_stride as usize;
+        let mut row = vec![T::ZERO; stride];
+        self.table_row(self.step, &mut row);
+        let mut curves = Vec::new();
+        self.curve_row(self.step, &mut curves);
+        let si = StepInfo {
+            step: self.step as u32,
+            row: 0,
+            _pad0: 0,
+            _pad1: 0,
+        };
+        let q = &self.ctx.queue;
+        q.write_buffer(&self.table, 0, bytemuck::cast_slice(&row));
+        if !curves.is_empty() {
+            q.write_buffer(&self.curves, 0, &load_bytes(&curves, self.real));
+        }
+        q.write_buffer(&self.step_info, 0, bytemuck::bytes_of(&si));
+        let k = match stage {
+            Stage::ElementForces => &self.element,
+            Stage::NodeUpdate => &self.node,
+        };
+        let mut enc = self.ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&k.pipeline);
+            pass.set_bind_group(0, &k.groups[self.step % 3], &[0]);
+            for _ in 0..reps {
+                pass.dispatch_workgroups(k.workgroups, 1, 1);
+            }
+        }
+        let idx = q.submit([enc.finish()]);
+        self.ctx
+            .device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(idx),
+                timeout: None,
+            })
+            .map_err(|e| Error::Gpu(format!("waiting for the device: {e}")))?;
+        self.ctx.check_uncaptured()?;
+        self.synced = false;
+        Ok(())
+    }
+
+    /// Reads the displacement and the saliva state back (once per state; cheap to repeat).
+    pub fn sync(&mut self) -> Result<()> {
+        if self.synced {
+            return Ok(());
+        }
+        let s = self.step;
+        let mut out = read_buffers(
+            &self.ctx,
+            &[
+                &self.u_bufs[s % 3],
+                &self.u_bufs[(s + 2) % 3],
+                &self.sal_prev,
+                &self.sal_state,
+                &self.sal_q,
+            ],
+        )?;
+        let nn = self.disc.num_nodes;
+        let to_vec3 = |b: &[u8]| -> Vec<[T; 3]> {
+            let v: Vec<T> = bytemuck::pod_collect_to_vec(&b[..3 * nn * std::mem::size_of::<T>()]);
+            v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+        };
+        self.u = to_vec3(&out[0]);
+        self.u_prev = to_vec3(&out[1]);
+        let sp = &self.disc.saliva;
+        let ns = sp.elements.len();
+        if ns > 0 {
+            let prev: Vec<T> =
+                bytemuck::pod_collect_to_vec(&out[2][..24 * ns * std::mem::size_of::<T>()]);
+            let state: Vec<u32> = bytemuck::pod_collect_to_vec(&out[3][..8 * ns]);
+            let q: Vec<T> = bytemuck::pod_collect_to_vec(&out[4][..ns * std::mem::size_of::<T>()]);
+            let st = &mut self.saliva;
+            for k in 0..ns {
+                st.previous[k] =
+                    std::array::from_fn(|a| std::array::from_fn(|i| prev[24 * k + 3 * a + i]));
+                st.broken[k] = state[2 * k] != 0;
+                st.broken_at[k] = if state[2 * k + 1] == NEVER {
+                    f64::NAN
+                } else {
+                    state[2 * k + 1] as f64 * self.dt
+                };
+                st.q[k] = q[k].to_f64();
+            }
+            if s > 0 {
+                // moisture and Z of the last step executed, as saliva_forces records them
+                let t = (s - 1) as f64 * self.dt;
+                for k in 0..ns {
+                    let g = &sp.groups[sp.group[k] as usize];
+                    let m = moisture(sp.initial_moisture[k], g.evaporation.evaporated(t));
+                    st.moisture[k] = m;
+                    st.z[k] = breaking_point(m, g.critical_moisture, g.k_glue);
+                }
+            }
+        }
+        out.clear();
+        self.synced = true;
+        Ok(())
+    }
+
+    /// The current displacement (read back if needed).
+    pub fn displacement(&mut self) -> Result<&[[T; 3]]> {
+        self.sync()?;
+        Ok(&self.u)
+    }
+    pub fn previous_displacement(&mut self) -> Result<&[[T; 3]]> {
+        self.sync()?;
+        Ok(&self.u_prev)
+    }
+    pub fn displacement_f64(&mut self) -> Result<Vec<[f64; 3]>> {
+        self.sync()?;
+        Ok(self.u.iter().map(|v| v.map(T::to_f64)).collect())
+    }
+    /// The saliva elements' state after the last step (read back if needed).
+    pub fn saliva(&mut self) -> Result<&SalivaState<T>> {
+        self.sync()?;
+        Ok(&self.saliva)
+    }
+
+    /// Sets the current and previous displacement (an initial condition), as
+    /// `Simulation::set_state`.
+    pub fn set_state(&mut self, u: &[[f64; 3]], u_prev: &[[f64; 3]]) {
+        let s = self.step;
+        let flat =
+            |v: &[[f64; 3]]| -> Vec<T> { v.iter().flatten().map(|&x| T::from_f64(x)).collect() };
+        self.ctx
+            .queue
+            .write_buffer(&self.u_bufs[s % 3], 0, bytemuck::cast_slice(&flat(u)));
+        self.ctx.queue.write_buffer(
+            &self.u_bufs[(s + 2) % 3],
+            0,
+            bytemuck::cast_slice(&flat(u_prev)),
+        );
+        self.synced = false;
+    }
+
+    /// Energies of the read-back state, as `Simulation::energies` computes them (f64).
+    pub fn energies(&mut self) -> Result<Energies> {
+        self.sync()?;
+        let u: Vec<[f64; 3]> = self.u.iter().map(|v| v.map(T::to_f64)).collect();
+        let mut kinetic = 0.0;
+        for n in 0..self.disc.num_nodes {
+            let mut v2 = 0.0;
+            for k in 0..3 {
+                let v = (self.u[n][k].to_f64() - self.u_prev[n][k].to_f64()) / self.dt;
+                v2 += v * v;
+            }
+            kinetic += 0.5 * self.disc.mass[n] * v2;
+        }
+        Ok(Energies {
+            kinetic,
+            strain: crate::tled::solver::strain_energy(&self.disc, &u),
+        })
+    }
+
+    /// Internal nodal forces at the read-back state (N), evaluated by the CPU stages in the
+    /// same precision (saliva elements broken at the last step contribute their last force).
+    pub fn internal_forces(&mut self) -> Result<Vec<[f64; 3]>> {
+        self.sync()?;
+        let mut elem_f = vec![[[T::ZERO; 3]; 8]; self.el.len()];
+        element_forces(&self.el, &self.u, &mut elem_f);
+        for (k, &e) in self.disc.saliva.elements.iter().enumerate() {
+            if self.saliva.broken[k] {
+                elem_f[e as usize] = self.saliva.previous[k];
+            }
+        }
+        Ok(gather_all(&self.disc.gather, &elem_f, self.disc.num_nodes)
+            .into_iter()
+            .map(|f| f.map(T::to_f64))
+            .collect())
+    }
+}
+
+/// Runs one entry point of `shaders/function_tests.wgsl` on `records` input records and
+/// returns `records * out_len` outputs: the harness `verification/gpu.rs` uses to compare
+/// each shared WGSL function with its Rust twin.
+pub fn run_function_test<T: GpuReal>(
+    ctx: &GpuContext,
+    real: ShaderReal,
+    entry: &str,
+    input: &[T],
+    records: usize,
+    out_len: usize,
+) -> Result<Vec<T>> {
+    if real.needs_f64() && !ctx.has_f64 {
+        return Err(Error::Gpu(format!("{} has no SHADER_F64", ctx.describe())));
+    }
+    let d = &ctx.device;
+    let (inp, out, count) = ctx.scoped("function test buffers", || {
+        let inp = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("input"),
+            contents: &bytes_of_slice(input),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let out = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("output"),
+            contents: &bytes_of_slice(&vec![T::ZERO; records * out_len]),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        });
+        let count = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("count"),
+            contents: bytemuck::cast_slice(&[records as u32, 0, 0, 0]),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        (inp, out, count)
+    })?;
+    let (pipeline, groups) = build_kernel(
+        ctx,
+        Kernel::FunctionTests,
+        entry,
+        real,
+        &[Bind::Read, Bind::ReadWrite, Bind::Uniform],
+        &[vec![&inp, &out, &count]],
+    )?;
+    let mut enc = d.create_command_encoder(&Default::default());
+    {
+        let mut pass = enc.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &groups[0], &[]);
+        pass.dispatch_workgroups((records as u32).div_ceil(WORKGROUP_SIZE).max(1), 1, 1);
+    }
+    ctx.queue.submit([enc.finish()]);
+    let bytes = read_buffers(ctx, &[&out])?;
+    Ok(bytemuck::pod_collect_to_vec(
+        &bytes[0][..records * out_len * std::mem::size_of::<T>()],
+    ))
+}
