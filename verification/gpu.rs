@@ -22,7 +22,7 @@ use sticky_lips::material::neo_hookean::{pk2_stress, two_green_strain};
 use sticky_lips::material::saliva::{apply_breaking_rule, stretch_across, BreakingRule};
 use sticky_lips::tled::element_forces::element_force;
 use sticky_lips::tled::Simulation;
-use sticky_lips::Problem;
+use sticky_lips::{Problem, Real};
 
 /// A device, or `None` after a loud message (a failure with `STICKY_LIPS_REQUIRE_GPU=1`).
 fn adapter(test: &str) -> Option<GpuContext> {
@@ -82,7 +82,7 @@ fn wgsl_functions_match_rust_f32() {
     let mut rng = ChaCha8Rng::seed_from_u64(6);
     let eps = f32::EPSILON as f64;
 
-    // cbrt_r vs std's f32::cbrt (Real::cbrt) over the range J^2 takes in practice and beyond
+    // cbrt_r vs the CPU's Real::cbrt (f32) over the range J^2 takes in practice and beyond
     // many more inputs for the cube root (cheap): 2^16
     const CBRT_RECORDS: usize = 1 << 16;
     let x: Vec<f32> = (0..CBRT_RECORDS)
@@ -99,15 +99,15 @@ fn wgsl_functions_match_rust_f32() {
     let worst = x
         .iter()
         .zip(&g)
-        .map(|(x, g)| ulps(*g, x.cbrt()))
+        .map(|(x, g)| ulps(*g, <f32 as Real>::cbrt(*x)))
         .max()
         .unwrap();
     println!(
-        "cbrt_r (f32 only): max {worst} ulp from f32::cbrt over {CBRT_RECORDS} inputs in [1e-6, 1e6]"
+        "cbrt_r (f32 only): max {worst} ulp from Real::cbrt (f32) over {CBRT_RECORDS} inputs in [1e-6, 1e6]"
     );
     // 1 ulp: Newton's iteration converges to within round-off of the exact root; the CPU's
     // is the correctly rounded root; the two differ by at most one ulp
-    assert!(worst <= 1, "cbrt_r differs from f32::cbrt by {worst} ulp");
+    assert!(worst <= 1, "cbrt_r differs from Real::cbrt by {worst} ulp");
     if ctx.has_f64 {
         let g = run_function_test::<f32>(
             &ctx,
@@ -121,13 +121,15 @@ fn wgsl_functions_match_rust_f32() {
         let differ = x
             .iter()
             .zip(&g)
-            .filter(|(x, g)| g.to_bits() != x.cbrt().to_bits())
+            .filter(|(x, g)| g.to_bits() != <f32 as Real>::cbrt(**x).to_bits())
             .count();
-        println!("cbrt_r (refined in f64): {differ} of {CBRT_RECORDS} differ from f32::cbrt");
+        println!(
+            "cbrt_r (refined in f64): {differ} of {CBRT_RECORDS} differ from Real::cbrt (f32)"
+        );
         // the f64 refinement is below one f64 ulp: rounding it gives the CPU's root
         assert_eq!(
             differ, 0,
-            "the f64-refined cbrt_r must equal f32::cbrt bit for bit"
+            "the f64-refined cbrt_r must equal Real::cbrt bit for bit"
         );
     }
     // the rest runs the kernels a run uses on this adapter
