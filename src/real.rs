@@ -147,11 +147,12 @@ impl CbrtLanes for f32 {
 // `cbrt(x) = +-2^q cbrt(a)` where `a = m 2^r` lies in [1, 8). The first guess of
 // `a^(-1/3)` is `g(m) 2^(-r/3)`, `g` a quadratic fitted to `m^(-1/3)` on [1, 2) by
 // iteratively reweighted least squares in relative error (max. relative error 1.8e-3).
-pub(crate) const CBRT_G0: f64 = 1.388_115_48;
-pub(crate) const CBRT_G1: f64 = -0.483_283_75;
-pub(crate) const CBRT_G2: f64 = 0.093_390_81;
+/// Coefficients of the first guess `g(m) = G0 + m (G1 + m G2)` of `m^(-1/3)` on [1, 2).
+pub const CBRT_G0: f64 = 1.388_115_48;
+pub const CBRT_G1: f64 = -0.483_283_75;
+pub const CBRT_G2: f64 = 0.093_390_81;
 /// `2^(-r/3)` for `r = 0, 1, 2`.
-pub(crate) const CBRT_INV_ROOT2: [f64; 3] = [1.0, 0.793_700_525_984_099_7, 0.629_960_524_947_436_6];
+pub const CBRT_INV_ROOT2: [f64; 3] = [1.0, 0.793_700_525_984_099_7, 0.629_960_524_947_436_6];
 const THIRD: f64 = 1.0 / 3.0;
 
 /// Range reduction of a normal `x` (see above): `(a, w0, s)` with `a` in [1, 8), `w0` the

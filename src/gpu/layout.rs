@@ -75,16 +75,11 @@ impl Status {
     };
 }
 
-/// Constants of the CPU's fixed-operation cube root (`real::cbrt_f64` of the lane-kernel
-/// work on the main branch: a quadratic first guess `G0 + G1 m + G2 m^2` of `m^(-1/3)` on
-/// [1, 2) and `2^(-r/3)`), used by the f32 kernels' f64-refined cube root
-/// (`shaders/common/real_f32_exact_cbrt.wgsl`). Same values as `real::CBRT_G0`,
-/// `CBRT_G1`, `CBRT_G2`, `CBRT_INV_ROOT2` there: once that is merged, these should be
-/// those constants.
-pub const CBRT_G0: f64 = 1.388_115_48;
-pub const CBRT_G1: f64 = -0.483_283_75;
-pub const CBRT_G2: f64 = 0.093_390_81;
-pub const CBRT_INV_ROOT2: [f64; 3] = [1.0, 0.793_700_525_984_099_7, 0.629_960_524_947_436_6];
+/// Constants of the CPU's fixed-operation cube root (`real::cbrt_f64`: a quadratic first
+/// guess `G0 + G1 m + G2 m^2` of `m^(-1/3)` on [1, 2) and `2^(-r/3)`), used by the f32
+/// kernels' f64-refined cube root (`shaders/common/real_f32_exact_cbrt.wgsl`). Rust owns
+/// them in `real.rs`; the WGSL gets them from [`wgsl_f64_constants`].
+pub use crate::real::{CBRT_G0, CBRT_G1, CBRT_G2, CBRT_INV_ROOT2};
 
 /// The f64 constants of the f64-refined cube root, for kernels that may use f64.
 pub fn wgsl_f64_constants() -> String {
