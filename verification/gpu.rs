@@ -289,7 +289,13 @@ fn compare_runs(
     real: ShaderReal,
     p: &Problem,
     frame: usize,
-) -> (f64, f64, Simulation<f32>, GpuSimulation<f32>) {
+) -> (
+    f64,
+    f64,
+    Simulation<f32>,
+    GpuSimulation<f32>,
+    Simulation<f64>,
+) {
     let mut cpu = Simulation::<f32>::new(p).unwrap();
     let mut cpu64 = Simulation::<f64>::new(p).unwrap();
     let mut gpu = GpuSimulation::<f32>::with_shader_real(ctx, p, real).unwrap();
@@ -308,7 +314,7 @@ fn compare_runs(
         gpu_vs_cpu = gpu_vs_cpu.max(rel_max_diff(&gpu.displacement_f64().unwrap(), &uc));
         f32_vs_f64 = f32_vs_f64.max(rel_max_diff(&uc, &cpu64.displacement_f64()));
     }
-    (gpu_vs_cpu, f32_vs_f64, cpu, gpu)
+    (gpu_vs_cpu, f32_vs_f64, cpu, gpu, cpu64)
 }
 
 const ORACLE: [&str; 5] = [
@@ -402,23 +408,27 @@ fn gpu_f32_follows_cpu_f32_on_niftysim_models() {
             )
             .unwrap();
             let every = (p.num_steps() / 10).max(1);
-            let (d, prec, mut cpu, mut gpu) = compare_runs(ctx, real, &p, every);
+            let (d, prec, mut cpu, mut gpu, mut cpu64) = compare_runs(ctx, real, &p, every);
             let fc = cpu.internal_forces();
             let fg = gpu.internal_forces().unwrap();
             let df = rel_max_diff(&fg, &fc);
+            // the internal forces get the same kind of bound as U, from their own f32-vs-f64
+            // difference (forces are differences of large element terms, so theirs is larger)
+            let prec_f = rel_max_diff(&fc, &cpu64.internal_forces());
             let exact = exact_adapter && real == ShaderReal::F32ExactCbrt;
-            let bound = run_bound(exact, prec);
+            let (bound, bound_f) = (run_bound(exact, prec), run_bound(exact, prec_f));
             println!(
-                "{name} ({real:?}): {} steps; GPU-f32 vs CPU-f32: U {d:.2e}, Fint {df:.2e}; CPU-f32 vs CPU-f64: U {prec:.2e}; bound {bound:.2e}",
+                "{name} ({real:?}): {} steps; GPU-f32 vs CPU-f32: U {d:.2e}, Fint {df:.2e}; CPU-f32 vs CPU-f64: U {prec:.2e}, Fint {prec_f:.2e}; bounds U {bound:.2e}, Fint {bound_f:.2e}",
                 p.num_steps(),
             );
             assert!(
                 d <= bound,
                 "{name} ({real:?}): GPU-f32 differs from CPU-f32 by {d:e}"
             );
-            if exact {
-                assert_eq!(df, 0.0, "{name}: Fint differs");
-            }
+            assert!(
+                df <= bound_f,
+                "{name} ({real:?}): GPU-f32 internal forces differ from CPU-f32 by {df:e}"
+            );
         }
     }
 }
@@ -516,7 +526,7 @@ fn gpu_f32_follows_cpu_f32_on_a_distorted_block() {
         !p.bc.rotations.is_empty() && !p.bc.gravity.is_empty() && !p.physics.muscles.is_empty()
     );
     for real in variants(&probe) {
-        let (d, prec, cpu, _) = compare_runs(GpuContext::new().unwrap(), real, &p, 50);
+        let (d, prec, cpu, _, _) = compare_runs(GpuContext::new().unwrap(), real, &p, 50);
         let umax = cpu
             .displacement_f64()
             .iter()
