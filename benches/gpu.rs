@@ -22,24 +22,14 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::time::{Duration, Instant};
-use sticky_lips::element::hex8::GradientVariant;
 use sticky_lips::gpu::sim::Stage;
 use sticky_lips::gpu::{GpuContext, GpuSimulation};
-use sticky_lips::material::NeoHookean;
-use sticky_lips::mesh::generate::block;
-use sticky_lips::problem::{MaterialSpec, Numerics, TimeSettings};
-use sticky_lips::tled::boundary::{
-    BoundaryConditions, Fixed, LoadCurve, LoadShape, PrescribedDisplacement,
-};
-use sticky_lips::tled::stability::element_estimates;
 use sticky_lips::tled::Simulation;
 use sticky_lips::{Problem, Real};
 
-const SIDE: f64 = 0.04;
-const TOP_DISP: f64 = -0.004;
-const RAMP_TIME: f64 = 0.1;
-const DT: f64 = 1e-4;
-const DAMPING: f64 = 50.0;
+mod common;
+use common::SIDE;
+
 const SEED_STEPS: usize = 5;
 
 #[derive(Clone, Copy)]
@@ -81,71 +71,11 @@ fn sizes() -> Vec<Size> {
 /// `benches/tled.rs`'s block, run for a very long time (the top holds after the ramp) so
 /// that criterion can step it as often as it likes.
 fn block_problem(c: usize) -> Problem {
-    let mesh = block([0.0; 3], [SIDE; 3], [c, c, c]);
-    let ne = mesh.elements.len();
-    let base = mesh.node_sets["z_min"].clone();
-    let top = mesh.node_sets["z_max"].clone();
-    let ntop = top.len();
-    let bc = BoundaryConditions {
-        fixed: vec![Fixed {
-            nodes: base,
-            dofs: [true; 3],
-        }],
-        displacements: vec![PrescribedDisplacement {
-            nodes: top,
-            dof: 2,
-            values: vec![TOP_DISP; ntop],
-            curve: LoadCurve {
-                shape: LoadShape::Ramp,
-                start: 0.0,
-                duration: RAMP_TIME,
-            },
-        }],
-        ..Default::default()
-    };
-    let mut p = Problem {
-        source: format!("bench block {c}^3"),
-        mesh,
-        materials: vec![MaterialSpec {
-            name: "block".into(),
-            law: NeoHookean {
-                mu: 1000.0,
-                bulk: 10000.0,
-            },
-            density: 1000.0,
-        }],
-        element_material: vec![0; ne],
-        bc,
-        time: TimeSettings {
-            dt: DT,
-            total_time: 1e4,
-            output_every: 100,
-        },
-        numerics: Numerics {
-            damping: DAMPING,
-            hourglass_kappa: 0.075,
-            variant: GradientVariant::Centroid,
-            niftysim_timing: false,
-        },
-        additive_constraints: false,
-        physics: Default::default(),
-    };
-    let est = element_estimates(&p)
-        .into_iter()
-        .fold(f64::INFINITY, f64::min);
-    p.time.dt = DT.min(0.8 * est);
-    p
+    common::block_problem(c, 1e4)
 }
 
 fn mouth_problem() -> Problem {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("paper/scenarios/fig4_sticky.toml");
-    let mut p = sticky_lips::io::scenario::read_with_overrides(
-        &path,
-        &[("time.total", toml::Value::Float(100.0))],
-    )
-    .expect("mouth scenario")
-    .problem;
+    let mut p = common::mouth_problem(100.0);
     p.source = "mouth".into();
     p
 }

@@ -35,27 +35,14 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use rayon::ThreadPool;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
-use sticky_lips::element::hex8::GradientVariant;
-use sticky_lips::material::NeoHookean;
-use sticky_lips::mesh::generate::block;
-use sticky_lips::problem::{MaterialSpec, Numerics, TimeSettings};
-use sticky_lips::tled::boundary::{
-    BoundaryConditions, Fixed, LoadCurve, LoadShape, PrescribedDisplacement,
-};
 use sticky_lips::tled::element_forces::{element_forces, ElementArrays};
 use sticky_lips::tled::node_update::{node_update, CentralDifference};
-use sticky_lips::tled::stability::element_estimates;
 use sticky_lips::tled::Simulation;
 use sticky_lips::{Problem, Real};
 
-/// Side of the block (m), as in `timing_block20.xml`.
-const SIDE: f64 = 0.04;
-/// Top displacement at the end of the ramp (m) and the ramp's duration (s).
-const TOP_DISP: f64 = -0.004;
-const RAMP_TIME: f64 = 0.1;
-/// NiftySim's time step (s).
-const DT: f64 = 1e-4;
-const DAMPING: f64 = 50.0;
+mod common;
+use common::{RAMP_TIME, SIDE};
+
 /// Steps run after seeding the state, before any measurement.
 const SEED_STEPS: usize = 5;
 
@@ -86,64 +73,9 @@ fn cells_per_side(n: usize) -> usize {
     c
 }
 
-/// The `timing_block20` problem with `c^3` hexahedra.
+/// The `timing_block20` problem with `c^3` hexahedra (`common::block_problem`).
 fn block_problem(c: usize) -> Problem {
-    let mesh = block([0.0; 3], [SIDE; 3], [c, c, c]);
-    let ne = mesh.elements.len();
-    let base = mesh.node_sets["z_min"].clone();
-    let top = mesh.node_sets["z_max"].clone();
-    let ntop = top.len();
-    let bc = BoundaryConditions {
-        fixed: vec![Fixed {
-            nodes: base,
-            dofs: [true; 3],
-        }],
-        displacements: vec![PrescribedDisplacement {
-            nodes: top,
-            dof: 2,
-            values: vec![TOP_DISP; ntop],
-            curve: LoadCurve {
-                shape: LoadShape::Ramp,
-                start: 0.0,
-                duration: RAMP_TIME,
-            },
-        }],
-        ..Default::default()
-    };
-    let mut p = Problem {
-        source: format!("bench block {c}^3"),
-        mesh,
-        materials: vec![MaterialSpec {
-            name: "block".into(),
-            law: NeoHookean {
-                mu: 1000.0,
-                bulk: 10000.0,
-            },
-            density: 1000.0,
-        }],
-        element_material: vec![0; ne],
-        bc,
-        time: TimeSettings {
-            dt: DT,
-            total_time: RAMP_TIME,
-            output_every: 100,
-        },
-        numerics: Numerics {
-            damping: DAMPING,
-            hourglass_kappa: 0.075,
-            variant: GradientVariant::Centroid,
-            // clamped load curve: the top holds at -0.004 m however long criterion steps
-            niftysim_timing: false,
-        },
-        additive_constraints: false,
-        physics: Default::default(),
-    };
-    // dt = 1e-4 s is stable up to 80^3 (critical 2/omega_max = 1.41e-4 s there, 0.95 of
-    // the smallest L_e / c_e); finer blocks get 0.8 L_e / c_e so `step` cannot diverge.
-    let est = element_estimates(&p)
-        .into_iter()
-        .fold(f64::INFINITY, f64::min);
-    p.time.dt = DT.min(0.8 * est);
+    let p = common::block_problem(c, RAMP_TIME);
     if std::env::var_os("STICKY_LIPS_BENCH_STABILITY").is_some() {
         let d = sticky_lips::tled::precompute::Discretisation::new(&p);
         let r = sticky_lips::tled::stability::analyse(&p, &d);
@@ -329,11 +261,7 @@ fn bench_precision<T: Real>(c: &mut Criterion, p: &Problem, pools: &[(usize, Thr
 /// from rest first so that the jaw has started to turn and every element is deformed.
 fn bench_mouth<T: Real>(c: &mut Criterion, pools: &[(usize, ThreadPool)]) {
     const MOUTH_SEED_STEPS: usize = 2000;
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("paper/scenarios/fig4_sticky.toml");
-    let p = sticky_lips::io::scenario::read(&path)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-        .problem;
+    let p = common::mouth_problem(1.0);
     let ne = p.mesh.elements.len();
     let mut sim: Option<Simulation<T>> = None;
     for (k, pool) in pools {

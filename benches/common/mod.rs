@@ -1,0 +1,96 @@
+//! Models shared by the benchmarks (`benches/tled.rs`, `benches/gpu.rs`): NiftySim's
+//! `timing_block20` scaled to `c^3` hexahedra, and the paper's mouth scene.
+
+use sticky_lips::element::hex8::GradientVariant;
+use sticky_lips::material::NeoHookean;
+use sticky_lips::mesh::generate::block;
+use sticky_lips::problem::{MaterialSpec, Numerics, TimeSettings};
+use sticky_lips::tled::boundary::{
+    BoundaryConditions, Fixed, LoadCurve, LoadShape, PrescribedDisplacement,
+};
+use sticky_lips::tled::stability::element_estimates;
+use sticky_lips::Problem;
+
+/// Side of the block (m), as in `timing_block20.xml`.
+pub const SIDE: f64 = 0.04;
+/// Top displacement at the end of the ramp (m) and the ramp's duration (s).
+pub const TOP_DISP: f64 = -0.004;
+pub const RAMP_TIME: f64 = 0.1;
+/// NiftySim's time step (s).
+pub const DT: f64 = 1e-4;
+pub const DAMPING: f64 = 50.0;
+
+/// The `timing_block20` problem with `c^3` hexahedra, simulated for `total_time` (the load
+/// curve is clamped: the top holds at `TOP_DISP` after the ramp, however long a benchmark
+/// steps). dt = 1e-4 s is stable up to 80^3 (critical 2/omega_max = 1.41e-4 s there, 0.95 of
+/// the smallest L_e / c_e); finer blocks get 0.8 L_e / c_e so a step cannot diverge.
+pub fn block_problem(c: usize, total_time: f64) -> Problem {
+    let mesh = block([0.0; 3], [SIDE; 3], [c, c, c]);
+    let ne = mesh.elements.len();
+    let base = mesh.node_sets["z_min"].clone();
+    let top = mesh.node_sets["z_max"].clone();
+    let ntop = top.len();
+    let bc = BoundaryConditions {
+        fixed: vec![Fixed {
+            nodes: base,
+            dofs: [true; 3],
+        }],
+        displacements: vec![PrescribedDisplacement {
+            nodes: top,
+            dof: 2,
+            values: vec![TOP_DISP; ntop],
+            curve: LoadCurve {
+                shape: LoadShape::Ramp,
+                start: 0.0,
+                duration: RAMP_TIME,
+            },
+        }],
+        ..Default::default()
+    };
+    let mut p = Problem {
+        source: format!("bench block {c}^3"),
+        mesh,
+        materials: vec![MaterialSpec {
+            name: "block".into(),
+            law: NeoHookean {
+                mu: 1000.0,
+                bulk: 10000.0,
+            },
+            density: 1000.0,
+        }],
+        element_material: vec![0; ne],
+        bc,
+        time: TimeSettings {
+            dt: DT,
+            total_time,
+            output_every: 100,
+        },
+        numerics: Numerics {
+            damping: DAMPING,
+            hourglass_kappa: 0.075,
+            variant: GradientVariant::Centroid,
+            // clamped load curve: the top holds at -0.004 m however long criterion steps
+            niftysim_timing: false,
+        },
+        additive_constraints: false,
+        physics: Default::default(),
+    };
+    let est = element_estimates(&p)
+        .into_iter()
+        .fold(f64::INFINITY, f64::min);
+    p.time.dt = DT.min(0.8 * est);
+    p
+}
+
+/// The paper's scene, `paper/scenarios/fig4_sticky.toml` (the mouth at paper resolution with
+/// its saliva layer, breaking rule and jaw), simulated for `total_time`.
+pub fn mouth_problem(total_time: f64) -> Problem {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("paper/scenarios/fig4_sticky.toml");
+    sticky_lips::io::scenario::read_with_overrides(
+        &path,
+        &[("time.total", toml::Value::Float(total_time))],
+    )
+    .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    .problem
+}
