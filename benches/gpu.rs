@@ -28,7 +28,6 @@ use sticky_lips::tled::Simulation;
 use sticky_lips::{Problem, Real};
 
 mod common;
-use common::SIDE;
 
 const SEED_STEPS: usize = 5;
 
@@ -80,26 +79,10 @@ fn mouth_problem() -> Problem {
     p
 }
 
-fn seed_displacement(p: &Problem) -> Vec<[f64; 3]> {
-    let h = 0.5 * SIDE;
-    p.mesh
-        .nodes
-        .iter()
-        .map(|x| {
-            let s = (std::f64::consts::PI * x[2] / SIDE).sin();
-            [
-                0.05 * (x[0] - h) * s,
-                0.05 * (x[1] - h) * s,
-                -0.02 * SIDE * s * (x[2] / SIDE),
-            ]
-        })
-        .collect()
-}
-
 fn bench_cpu<T: Real>(c: &mut Criterion, p: &Problem, label: &str, seeded: bool) {
     let mut sim = Simulation::<T>::new(p).expect("valid bench problem");
     if seeded {
-        let u0 = seed_displacement(p);
+        let u0 = common::seed_displacement(p);
         sim.set_state(&u0, &u0);
     }
     for _ in 0..SEED_STEPS {
@@ -131,7 +114,7 @@ fn bench_gpu(c: &mut Criterion, p: &Problem, label: &str, seeded: bool) {
     eprintln!("gpu benchmarks on {}", ctx.describe());
     let mut sim = GpuSimulation::<f32>::with_context(ctx, p).expect("GPU simulation");
     if seeded {
-        let u0 = seed_displacement(p);
+        let u0 = common::seed_displacement(p);
         sim.set_state(&u0, &u0);
     }
     sim.step_many(SEED_STEPS).expect("stable");

@@ -41,7 +41,7 @@ use sticky_lips::tled::Simulation;
 use sticky_lips::{Problem, Real};
 
 mod common;
-use common::{RAMP_TIME, SIDE};
+use common::RAMP_TIME;
 
 /// Steps run after seeding the state, before any measurement.
 const SEED_STEPS: usize = 5;
@@ -87,24 +87,6 @@ fn block_problem(c: usize) -> Problem {
     p
 }
 
-/// A deformed state that satisfies the constraints at t = 0: zero on the base and top
-/// faces, lateral bulge of 5 % and axial compression of up to 2 % of the side in between.
-fn seed_displacement(p: &Problem) -> Vec<[f64; 3]> {
-    let h = 0.5 * SIDE;
-    p.mesh
-        .nodes
-        .iter()
-        .map(|x| {
-            let s = (std::f64::consts::PI * x[2] / SIDE).sin();
-            [
-                0.05 * (x[0] - h) * s,
-                0.05 * (x[1] - h) * s,
-                -0.02 * SIDE * s * (x[2] / SIDE),
-            ]
-        })
-        .collect()
-}
-
 /// Everything one (size, precision) pair needs: a running simulation in a deformed state,
 /// and the inputs of the two stages taken from it.
 struct Fixture<T: Real> {
@@ -120,7 +102,7 @@ struct Fixture<T: Real> {
 impl<T: Real> Fixture<T> {
     fn new(p: &Problem) -> Self {
         let mut sim = Simulation::<T>::new(p).expect("bench problem is valid");
-        let u0 = seed_displacement(p);
+        let u0 = common::seed_displacement(p);
         sim.set_state(&u0, &u0);
         for _ in 0..SEED_STEPS {
             sim.step().expect("seed steps stay stable");

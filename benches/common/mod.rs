@@ -94,3 +94,22 @@ pub fn mouth_problem(total_time: f64) -> Problem {
     .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
     .problem
 }
+
+/// A deformed state of the block that satisfies its constraints at t = 0: zero on the base
+/// and top faces, lateral bulge of 5 % and axial compression of up to 2 % of the side in
+/// between (so that every element is deformed before anything is measured).
+pub fn seed_displacement(p: &Problem) -> Vec<[f64; 3]> {
+    let h = 0.5 * SIDE;
+    p.mesh
+        .nodes
+        .iter()
+        .map(|x| {
+            let s = (std::f64::consts::PI * x[2] / SIDE).sin();
+            [
+                0.05 * (x[0] - h) * s,
+                0.05 * (x[1] - h) * s,
+                -0.02 * SIDE * s * (x[2] / SIDE),
+            ]
+        })
+        .collect()
+}
