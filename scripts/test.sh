@@ -13,7 +13,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$(pwd)
-step() { printf '\n==> %s\n' "$*"; }
+T0=$(date +%s)
+# each phase prints the seconds since the script started (CI keeps only the log)
+step() { printf '\n==> [%4ds] %s\n' "$(($(date +%s) - T0))" "$*"; }
 
 if [ "${CI:-}" = "true" ]; then
   step "GPU on the CPU: lavapipe (CI=true)"
@@ -56,8 +58,9 @@ step "cargo test (unit tests, verification suite, doc tests)"
 cargo test --all-targets
 cargo test --doc
 
-step "CLI runs, outputs checked with meshio"
+step "cargo build --release"
 cargo build --release --quiet
+step "CLI runs, outputs checked with meshio"
 BIN="$ROOT/target/release/sticky-lips"
 OUT="$ROOT/target/test-outputs"
 rm -rf "$OUT"
@@ -92,4 +95,4 @@ done
 test -s "$OUT/paper-quick/table1.md" && test -s "$OUT/paper-quick/measured.json"
 STICKY_LIPS_OUT="$OUT/paper-quick/runs/fig4_sticky" "$PY" -m pytest -q scripts/check_outputs.py
 
-printf '\nall checks passed\n'
+printf '\nall checks passed (%d s)\n' "$(($(date +%s) - T0))"
