@@ -5,6 +5,9 @@
 //! - `element_forces/gpu-f32`: the `element_forces` kernel alone, dispatched repeatedly at
 //!   a fixed deformed state in one submission;
 //! - `node_update/gpu-f32`: the `node_update` kernel alone, likewise;
+//! - `host/gpu-f32`: what a step costs the CPU whatever the adapter: the per-step data
+//!   Rust evaluates and the recording of the step's dispatches, nothing uploaded or
+//!   submitted (`GpuSimulation::bench_host`); a floor under `step/gpu-f32` on any GPU;
 //! - `step/gpu-f32`: full steps (`GpuSimulation::step_many`: element forces, saliva rule if
 //!   any, node update; one submission per call, the status read back at the end);
 //! - `step/cpu-f32` and `step/cpu-f64`: `Simulation::step` on all cores (rayon), the same
@@ -119,6 +122,23 @@ fn bench_gpu(c: &mut Criterion, p: &Problem, label: &str, seeded: bool) {
     }
     sim.step_many(SEED_STEPS).expect("stable");
     let ne = p.mesh.elements.len() as u64;
+    {
+        let mut g = c.benchmark_group("host");
+        g.throughput(Throughput::Elements(ne));
+        g.bench_function(BenchmarkId::new("gpu-f32", label), |b| {
+            b.iter_custom(|iters| {
+                let t = Instant::now();
+                let mut left = iters as usize;
+                while left > 0 {
+                    let n = left.min(sticky_lips::gpu::sim::MAX_BATCH);
+                    drop(std::hint::black_box(sim.bench_host(n)));
+                    left -= n;
+                }
+                t.elapsed()
+            })
+        });
+        g.finish();
+    }
     for (name, stage) in [
         ("element_forces", Some(Stage::ElementForces)),
         ("node_update", Some(Stage::NodeUpdate)),

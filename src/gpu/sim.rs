@@ -793,15 +793,18 @@ impl<T: GpuReal> GpuSimulation<T> {
         Ok(())
     }
 
-    fn batch(&mut self, n: usize) -> Result<()> {
+    /// The per-step data of steps `self.step .. self.step + n` (host side, f64 math).
+    fn fill_rows(&self, n: usize, table: &mut Vec<T>, curves: &mut Vec<f64>, info: &mut Vec<u8>) {
         let stride = self.params.table_stride as usize;
-        let mut table = vec![T::ZERO; n * stride];
-        let mut info = vec![0u8; n * self.step_stride as usize];
-        let mut curves = Vec::with_capacity(n * self.disc.loads.len());
+        table.clear();
+        table.resize(n * stride, T::ZERO);
+        info.clear();
+        info.resize(n * self.step_stride as usize, 0);
+        curves.clear();
         for j in 0..n {
             let s = self.step + j;
             self.table_row(s, &mut table[j * stride..(j + 1) * stride]);
-            self.curve_row(s, &mut curves);
+            self.curve_row(s, curves);
             let si = StepInfo {
                 step: s as u32,
                 row: j as u32,
@@ -811,18 +814,10 @@ impl<T: GpuReal> GpuSimulation<T> {
             let o = j * self.step_stride as usize;
             info[o..o + std::mem::size_of::<StepInfo>()].copy_from_slice(bytemuck::bytes_of(&si));
         }
-        let q = &self.ctx.queue;
-        q.write_buffer(&self.table, 0, bytemuck::cast_slice(&table));
-        if !curves.is_empty() {
-            q.write_buffer(&self.curves, 0, &load_bytes(&curves, self.real));
-        }
-        q.write_buffer(&self.step_info, 0, &info);
-        let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("status read back"),
-            size: std::mem::size_of::<Status>() as u64,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+    }
+
+    /// Records the dispatches of `n` steps from `self.step` into one compute pass.
+    fn encode_steps(&self, n: usize) -> wgpu::CommandEncoder {
         let mut enc = self.ctx.device.create_command_encoder(&Default::default());
         {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -846,6 +841,36 @@ impl<T: GpuReal> GpuSimulation<T> {
                 }
             }
         }
+        enc
+    }
+
+    /// For benchmarks: what a batch of `n` steps costs the CPU on any adapter (the per-step
+    /// data and the recording of every dispatch), without uploading or submitting anything;
+    /// the state does not advance. `n` is capped at [`MAX_BATCH`].
+    pub fn bench_host(&self, n: usize) -> wgpu::CommandBuffer {
+        let n = n.min(MAX_BATCH);
+        let (mut table, mut curves, mut info) = (Vec::new(), Vec::new(), Vec::new());
+        self.fill_rows(n, &mut table, &mut curves, &mut info);
+        std::hint::black_box((&table, &curves, &info));
+        self.encode_steps(n).finish()
+    }
+
+    fn batch(&mut self, n: usize) -> Result<()> {
+        let (mut table, mut curves, mut info) = (Vec::new(), Vec::new(), Vec::new());
+        self.fill_rows(n, &mut table, &mut curves, &mut info);
+        let q = &self.ctx.queue;
+        q.write_buffer(&self.table, 0, bytemuck::cast_slice(&table));
+        if !curves.is_empty() {
+            q.write_buffer(&self.curves, 0, &load_bytes(&curves, self.real));
+        }
+        q.write_buffer(&self.step_info, 0, &info);
+        let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("status read back"),
+            size: std::mem::size_of::<Status>() as u64,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = self.encode_steps(n);
         enc.copy_buffer_to_buffer(
             &self.status,
             0,
