@@ -3,9 +3,10 @@
 // gather the element blocks in the fixed NodeGather order (no float atomics: the same bits
 // on every run), the external force R_s = sum_g curve_g(t_s) r_g, the central difference of
 // paper eq. (3) in increment form u_{s+1} = u_s + A (R - F) + c1 (u_s - u_{s-1}), then the
-// constraints at t_{s+1}: fixed DOFs to 0, prescribed and rotated DOFs to the values Rust
-// evaluated in f64 for this step (per-step table), so the jaw rotation matches the CPU's.
-// The load-curve values come per step from Rust too (`curves`); WGSL has no load shapes.
+// constraints at t_{s+1}: fixed DOFs to 0, prescribed and rotated DOFs to a fixed linear
+// combination of this step's row (curve values and rotation matrices Rust evaluated in
+// f64), summed in the CPU's order, so the jaw rotation matches the CPU's. WGSL has no load
+// shapes and no trigonometry.
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<uniform> step: StepInfo;
@@ -18,16 +19,21 @@
 @group(0) @binding(6) var<storage, read> gather: array<u32>;
 // A_n = dt^2 / (m_n (1 + alpha dt / 2)) per node, then c1 at index num_nodes
 @group(0) @binding(7) var<storage, read> node_a: array<real>;
-// CSR over nodes of load entries: offsets (num_nodes + 1), then keys (component | group << 2)
+// CSR over nodes of load entries: offsets (num_nodes + 1), then keys
+// (component | index in the step row of the entry's curve value << 2)
 @group(0) @binding(8) var<storage, read> load_key: array<u32>;
 // magnitude of each load entry (N), same order as the keys
 @group(0) @binding(9) var<storage, read> load_val: array<load_real>;
-@group(0) @binding(10) var<storage, read> table: array<real>;
-// per DOF: DOF_FREE, DOF_FIXED or the index of its imposed value in a table row
+// per step (row_stride per row): [1 | load curves at t_s | prescribed curves at t_{s+1} |
+// rotation matrices at t_{s+1}]
+@group(0) @binding(10) var<storage, read> step_row: array<load_real>;
+// per DOF: DOF_FREE, DOF_FIXED or its index among the imposed DOFs
 @group(0) @binding(11) var<storage, read> dof_slot: array<u32>;
-@group(0) @binding(12) var<storage, read_write> status: Status;
-// per step: the curve value of every load group at t_s (num_loads per row)
-@group(0) @binding(13) var<storage, read> curves: array<load_real>;
+// CSR over imposed DOFs of terms: offsets (num_imposed + 1), then each term's row index
+@group(0) @binding(12) var<storage, read> imp_key: array<u32>;
+// coefficient of each term, same order
+@group(0) @binding(13) var<storage, read> imp_coef: array<load_real>;
+@group(0) @binding(14) var<storage, read_write> status: Status;
 
 @compute @workgroup_size(WG)
 fn node_update(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -54,14 +60,13 @@ fn node_update(@builtin(global_invocation_id) gid: vec3<u32>) {
     // external forces, in the CPU's accumulation order (group, then entry); each entry is
     // real(v * c), the product formed in load_real
     var r = array<real, 3>(0.0, 0.0, 0.0);
-    let row = step.row * params.table_stride;
-    let crow = step.row * params.num_loads;
+    let row = step.row * params.row_stride;
     let l0 = load_key[n];
     let l1 = load_key[n + 1u];
     for (var i = l0; i < l1; i++) {
         let key = load_key[nn + 1u + i];
         let k = key & 3u;
-        r[k] = r[k] + real(load_val[i] * curves[crow + (key >> 2u)]);
+        r[k] = r[k] + real(load_val[i] * step_row[row + (key >> 2u)]);
     }
     let a = node_a[n];
     let c1 = node_a[nn];
@@ -76,13 +81,21 @@ fn node_update(@builtin(global_invocation_id) gid: vec3<u32>) {
         atomicMin(&status.node_step, s);
         atomicMin(&status.node, n);
     }
-    // apply_constraints at t_{s+1}
+    // apply_constraints at t_{s+1}: an imposed DOF is c_0 row[i_0] + c_1 row[i_1] + ...,
+    // left to right in load_real, rounded once
+    let terms = params.num_imposed + 1u;
     for (var k = 0u; k < 3u; k++) {
         let c = dof_slot[3u * n + k];
         if (c == DOF_FIXED) {
             v[k] = 0.0;
         } else if (c != DOF_FREE) {
-            v[k] = table[row + params.imposed_base + c];
+            let t0 = imp_key[c];
+            let t1 = imp_key[c + 1u];
+            var acc = imp_coef[t0] * step_row[row + imp_key[terms + t0]];
+            for (var t = t0 + 1u; t < t1; t++) {
+                acc = acc + imp_coef[t] * step_row[row + imp_key[terms + t]];
+            }
+            v[k] = real(acc);
         }
         u_next[3u * n + k] = v[k];
     }

@@ -1,7 +1,7 @@
 // Stage `saliva_forces` (Rust twin: src/tled/saliva_forces.rs::saliva_forces): the breaking
 // rule of paper eq. (11) on the block of every saliva element, with its stretch across the
 // layer (eqs. 8-10) and its breaking point Z (eqs. 6-7, evaluated in f64 by Rust for each
-// step and read from the per-step table). One invocation per saliva element.
+// step and read from the per-step saliva row). One invocation per saliva element.
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<uniform> step: StepInfo;
@@ -10,7 +10,7 @@
 @group(0) @binding(4) var<storage, read> dhdx: array<real>;
 @group(0) @binding(5) var<storage, read_write> elem_f: array<real>;
 @group(0) @binding(6) var<storage, read_write> status: Status;
-// per step: [load curve values | imposed values | Z of each saliva element]
+// per step: the breaking point Z of each saliva element (table_stride per row)
 @group(0) @binding(7) var<storage, read> table: array<real>;
 // per saliva element: element index, group, rule
 @group(0) @binding(8) var<storage, read> sal_meta: array<u32>;
@@ -56,7 +56,7 @@ fn saliva_forces(@builtin(global_invocation_id) gid: vec3<u32>) {
     let h = displacement_gradient(&ue, &d);
     let y = vec3<real>(sal_across[3u * k], sal_across[3u * k + 1u], sal_across[3u * k + 2u]);
     let q = stretch_across(h, y);
-    let z = table[step.row * params.table_stride + params.saliva_base + k];
+    let z = table[step.row * params.table_stride + k];
     let broken = apply_breaking_rule(q, z, rule, sal_decay[g], sal_state[2u * k] != 0u, &f, &prev);
     for (var i = 0u; i < 24u; i++) {
         elem_f[24u * e + i] = f[i];

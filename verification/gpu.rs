@@ -705,3 +705,104 @@ fn gpu_f64_follows_cpu_f64_on_niftysim_models() {
         assert!(d <= 1e-12, "{name}: GPU-f64 differs from CPU-f64 by {d:e}");
     }
 }
+
+/// `(step, element, node)` of a divergence error.
+fn divergence(e: &sticky_lips::Error) -> (usize, Option<usize>, Option<usize>) {
+    match e {
+        sticky_lips::Error::Diverged {
+            step,
+            element,
+            node,
+            time,
+            ..
+        } => {
+            assert!(*time >= 0.0);
+            (*step, *element, *node)
+        }
+        other => panic!("expected a divergence, got {other}"),
+    }
+}
+
+/// A run with a time step 0.5 % above the critical one (the distorted block, fixed at one
+/// end, no loads, started from a 1e-20 m seeded perturbation) grows its highest mode until an
+/// element inverts, in the second batch of steps while the third is already submitted
+/// (batches are pipelined). The GPU must stop there with the step, time and element of the
+/// CPU, and leave the state before the failing step: with bit-exact kernels the CPU's state
+/// bit for bit; otherwise a finite state, the step within 2 % of the CPU's.
+#[test]
+fn gpu_divergence_stops_where_the_cpu_does() {
+    use sticky_lips::gpu::sim::MAX_BATCH;
+    use sticky_lips::tled::boundary::Fixed;
+    use sticky_lips::tled::precompute::Discretisation;
+    use sticky_lips::tled::stability::analyse;
+    let Some(probe) = adapter("gpu_divergence_stops_where_the_cpu_does") else {
+        return;
+    };
+    let exact_adapter = kernels_bit_exact(&probe);
+    let mut p = distorted_block_problem();
+    p.bc = Default::default();
+    p.physics = Default::default();
+    p.bc.fixed.push(Fixed {
+        nodes: p.mesh.node_sets["x_min"].clone(),
+        dofs: [true; 3],
+    });
+    let dtc = analyse(&p, &Discretisation::new(&p)).critical_time_step;
+    p.time.dt = 1.005 * dtc;
+    p.time.total_time = 5000.0 * p.time.dt;
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let u0: Vec<[f64; 3]> = p
+        .mesh
+        .nodes
+        .iter()
+        .map(|x| {
+            if x[0] > 0.0 {
+                std::array::from_fn(|_| 1e-20 * rng.random_range(-1.0..1.0))
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect();
+    let mut cpu = Simulation::<f32>::new(&p).unwrap();
+    cpu.set_state(&u0, &u0);
+    let cpu_err = loop {
+        match cpu.step() {
+            Ok(()) => assert!(!cpu.is_finished(), "the CPU run did not diverge"),
+            Err(e) => break e,
+        }
+    };
+    let (cs, ce, cn) = divergence(&cpu_err);
+    assert_eq!(
+        cpu.step_index(),
+        cs,
+        "the CPU keeps the state before the failing step"
+    );
+    assert!(
+        cs > MAX_BATCH && cs + MAX_BATCH < p.num_steps(),
+        "the failure (step {cs}) must fall in a batch that has a later batch behind it"
+    );
+    for real in variants(&probe) {
+        let mut gpu =
+            GpuSimulation::<f32>::with_shader_real(GpuContext::new().unwrap(), &p, real).unwrap();
+        gpu.set_state(&u0, &u0);
+        let e = gpu
+            .step_many(p.num_steps())
+            .expect_err("the GPU run must diverge");
+        let (gs, ge, gn) = divergence(&e);
+        println!("divergence ({real:?}): CPU {cpu_err}; GPU {e}");
+        assert_eq!(gpu.step_index(), gs);
+        let ug = gpu.displacement_f64().unwrap();
+        if exact_adapter && real == ShaderReal::F32ExactCbrt {
+            assert_eq!((gs, ge, gn), (cs, ce, cn), "GPU {e} vs CPU {cpu_err}");
+            assert!(
+                ug == cpu.displacement_f64(),
+                "the state left behind must be the CPU's, bit for bit"
+            );
+        } else {
+            assert!(
+                gs.abs_diff(cs) * 50 <= cs,
+                "GPU diverged at step {gs}, CPU at {cs}"
+            );
+            assert!(ug.iter().flatten().all(|x| x.is_finite()));
+        }
+    }
+}

@@ -4,20 +4,19 @@
 // (WG, DOF_FREE, DOF_FIXED, RULE_LATCHED, NEVER) are generated from Rust by
 // src/gpu/shaders.rs and prepended to every kernel.
 
-// Sizes and table layout of one model. Twin: layout::Params.
+// Sizes and per-step row layout of one model (rows: src/gpu/sim.rs). Twin: layout::Params.
 struct Params {
     num_elements: u32,
     num_nodes: u32,
     num_saliva: u32,
-    // reals per row of the per-step table
+    // imposed DOFs: imp_key holds num_imposed + 1 offsets, then the terms' row indices
+    num_imposed: u32,
+    // load_reals per step row: [1 | load curves | prescribed curves | rotation matrices]
+    row_stride: u32,
+    // reals per saliva row (the breaking point Z of each saliva element; at least 1)
     table_stride: u32,
-    // offset in a row of the imposed displacement values
-    imposed_base: u32,
-    // offset in a row of the saliva breaking points Z (one per saliva element)
-    saliva_base: u32,
-    // load groups: curve values per step in `curves` (a row of num_loads per step)
-    num_loads: u32,
     _pad0: u32,
+    _pad1: u32,
 }
 
 // The step a dispatch belongs to (bound with a dynamic offset, one per step of a batch).
@@ -25,7 +24,7 @@ struct Params {
 struct StepInfo {
     // iteration s (t_s = s dt)
     step: u32,
-    // row of this step in the per-step table
+    // row of this step in the per-step buffers (0 .. batch length)
     row: u32,
     _pad0: u32,
     _pad1: u32,

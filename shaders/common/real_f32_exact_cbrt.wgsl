@@ -9,16 +9,13 @@ fn is_finite_r(x: real) -> bool {
     return (bitcast<u32>(x) & 0x7f800000u) != 0x7f800000u;
 }
 
-// Cube root of x, equal bit for bit to the CPU's `Real::cbrt` for f32: a port of the
-// CPU's fixed-operation cube root (`cbrt_f64` of the lane-kernel work on the main branch:
-// range reduction on the bits, a quadratic first guess of a^(-1/3), three division-free
-// Newton steps, one final Newton step for the root, error below one f64 ulp), then rounded
-// once to f32. Only + - * / are used in f64 (no transcendental: gfx-rs/wgpu#6087); the
-// range reduction works on the f32 bits of x, which give the same (a, w0, s) as the f64
-// bits of f64(x). The constants CBRT_* are generated from Rust (src/gpu/layout.rs).
-// Until that CPU routine is merged, the CPU's f32 root is std's (the correctly rounded
-// root); the two agree except where double rounding bites (about 2^-28 of inputs; none of
-// verification/gpu.rs's 4096 inputs nor any step of its runs).
+// Cube root of x, equal bit for bit to the CPU's `Real::cbrt` for f32 (src/real.rs: the
+// f64 fixed-operation root `cbrt_f64` of f64(x), rounded once to f32): range reduction on
+// the bits, a quadratic first guess of a^(-1/3), three division-free Newton steps, one
+// final Newton step for the root (error below one f64 ulp), then rounded once to f32.
+// Only + - * / are used in f64 (no transcendental: gfx-rs/wgpu#6087); the range reduction
+// works on the f32 bits of x, which give the same (a, w0, s) as the f64 bits of f64(x).
+// The constants CBRT_* are Rust's (src/real.rs, prepended by src/gpu/shaders.rs).
 fn cbrt_r(x: real) -> real {
     if (!(x > 0.0) || !is_finite_r(x)) {
         return select(x, 0.0, x == 0.0);

@@ -22,7 +22,7 @@ pub const RULE_LATCHED: u32 = 1;
 /// "No step" in [`Status`] and in a saliva element's first-broken step (`NEVER` in WGSL).
 pub const NEVER: u32 = u32::MAX;
 
-/// Sizes and per-step table layout of one model.
+/// Sizes and per-step row layout of one model (rows: see [`crate::gpu::sim`]).
 /// Must stay in sync with `struct Params` in `shaders/common/layout.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -30,15 +30,14 @@ pub struct Params {
     pub num_elements: u32,
     pub num_nodes: u32,
     pub num_saliva: u32,
-    /// Scalars per row of the per-step table.
+    /// Imposed (prescribed or rotated) DOFs: the length of the `imp_key` offsets minus one.
+    pub num_imposed: u32,
+    /// `load_real`s per step row (`[1 | load curves | prescribed curves | rotations]`).
+    pub row_stride: u32,
+    /// Stepping scalars per saliva row (the breaking points `Z`; at least 1).
     pub table_stride: u32,
-    /// Offset in a row of the imposed displacement values.
-    pub imposed_base: u32,
-    /// Offset in a row of the saliva breaking points `Z`.
-    pub saliva_base: u32,
-    /// Load groups (a row of the `curves` buffer per step).
-    pub num_loads: u32,
     pub _pad0: u32,
+    pub _pad1: u32,
 }
 
 /// The step one dispatch belongs to; one per step of a batch, bound at a dynamic offset.
@@ -179,11 +178,11 @@ mod tests {
             num_elements,
             num_nodes,
             num_saliva,
+            num_imposed,
+            row_stride,
             table_stride,
-            imposed_base,
-            saliva_base,
-            num_loads,
-            _pad0
+            _pad0,
+            _pad1
         );
         check!(StepInfo, step, row, _pad0, _pad1);
         check!(Status, element_step, element, node_step, node);

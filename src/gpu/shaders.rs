@@ -23,6 +23,14 @@ impl ShaderReal {
     pub fn needs_f64(self) -> bool {
         self != ShaderReal::F32
     }
+    /// Bytes of one `load_real` (f64 wherever the kernels may use f64).
+    pub fn load_size(self) -> usize {
+        if self.needs_f64() {
+            8
+        } else {
+            4
+        }
+    }
     fn prelude(self) -> &'static str {
         match self {
             ShaderReal::F32 => include_str!("../../shaders/common/real_f32.wgsl"),

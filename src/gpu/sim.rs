@@ -13,12 +13,25 @@
 //! nothing is copied between steps. Only the 16-byte [`Status`] is read back after a
 //! batch; the state is read back when asked for ([`GpuSimulation::sync`]).
 //!
-//! Everything that depends on time only is evaluated in f64 by Rust for each step of a
-//! batch and uploaded: a per-step table of stepping scalars (the imposed value of every
-//! prescribed or rotated DOF at `t_{s+1}`, and the breaking point `Z` of every saliva
-//! element, eqs. 6-7) and a per-step row of load-curve values (in f64 wherever the kernels
-//! may use f64, so that each load entry is the f64 product rounded once, as on the CPU).
-//! The WGSL has no load-shape, rotation or moisture code and uses exactly the CPU's values.
+//! Everything that depends on time only is evaluated in f64 by Rust, once per step of a
+//! batch, and uploaded as two short per-step rows, so the CPU's share of a step does not
+//! grow with the number of driven nodes (`host/*` in `benches/gpu.rs`):
+//!
+//! - the step row, in `load_real` (f64 wherever the kernels may use f64): `[1 | the curve
+//!   value of every load group at t_s | of every prescribed-displacement curve at t_{s+1} |
+//!   the 3x3 matrix of every prescribed rotation at t_{s+1}, row-major]`;
+//! - the saliva row, in the stepping scalar: the breaking point `Z` of every saliva element
+//!   at `t_s` (eqs. 6-7).
+//!
+//! Each external load entry is `real(v * row[g])` and each imposed DOF a fixed linear
+//! combination of row entries, `real(c_0 row[i_0] + c_1 row[i_1] + ...)` summed left to
+//! right in `load_real`, with the terms set up here so that the operations are the CPU's
+//! (`solver::apply_constraints_into`). A prescribed DOF is `0 * 1 + v_1 curve_1 + ...`
+//! (the CPU's f64 accumulator starts at 0). A rotated DOF `k` is `d_0 R_k0 + d_1 R_k1 +
+//! d_2 R_k2 - d_k` (the last term as `(-d_k) * 1`), with `d = x - p` formed in f64 here,
+//! as `PrescribedRotation::displacement_by` forms `R d - d`. With f64 kernels, or the f32
+//! kernels' f64 `load_real`, that is the CPU's value bit for bit; with f32-only kernels it
+//! is the same sum in f32. The WGSL has no load-shape, rotation or moisture code.
 //!
 //! Precision: with `SHADER_F64` on the adapter, the f32 kernels ([`ShaderReal::F32ExactCbrt`])
 //! return the CPU's f32 bits (verified on lavapipe: whole runs identical); without it
@@ -71,13 +84,14 @@ pub enum Stage {
     NodeUpdate,
 }
 
-/// Where the value of an imposed slot comes from.
-#[derive(Clone, Copy, Debug)]
-enum Imposed {
-    /// Index into `constraints.prescribed_dofs`.
-    Prescribed(usize),
-    /// Rotation `r`, node `n`, component `k`.
-    Rotation(usize, u32, usize),
+/// Index in the step row of the constant 1 (see the module documentation).
+const ROW_ONE: u32 = 0;
+
+/// A submitted batch whose status has not been read yet.
+struct InFlight {
+    /// Receives the status after the batch's last dispatch.
+    staging: wgpu::Buffer,
+    index: wgpu::SubmissionIndex,
 }
 
 struct Kernels {
@@ -90,14 +104,14 @@ struct Kernels {
 pub struct GpuSimulation<T: GpuReal> {
     pub disc: Discretisation,
     ctx: GpuContext,
-    reference: Vec<[f64; 3]>,
     el: ElementArrays<T>,
     element: Kernels,
     saliva_k: Option<Kernels>,
     node: Kernels,
     u_bufs: [wgpu::Buffer; 3],
     table: wgpu::Buffer,
-    curves: wgpu::Buffer,
+    /// Per-step rows in `load_real` (see the module documentation).
+    step_row: wgpu::Buffer,
     step_info: wgpu::Buffer,
     status: wgpu::Buffer,
     sal_prev: wgpu::Buffer,
@@ -106,7 +120,6 @@ pub struct GpuSimulation<T: GpuReal> {
     step_stride: u64,
     real: ShaderReal,
     params: Params,
-    imposed: Vec<Imposed>,
     step: usize,
     num_steps: usize,
     dt: f64,
@@ -237,12 +250,29 @@ fn map_and_read(
     staging: &wgpu::Buffer,
     sizes: impl Iterator<Item = u64>,
 ) -> Result<Vec<Vec<u8>>> {
+    map_and_read_after(ctx, staging, None, sizes)
+}
+
+/// As [`map_and_read`], waiting only for submission `index` (and those before it) when given.
+fn map_and_read_after(
+    ctx: &GpuContext,
+    staging: &wgpu::Buffer,
+    index: Option<wgpu::SubmissionIndex>,
+    sizes: impl Iterator<Item = u64>,
+) -> Result<Vec<Vec<u8>>> {
     let (tx, rx) = std::sync::mpsc::channel();
     staging.map_async(wgpu::MapMode::Read, .., move |r| {
         let _ = tx.send(r);
     });
+    let wait = match index {
+        Some(i) => wgpu::PollType::Wait {
+            submission_index: Some(i),
+            timeout: None,
+        },
+        None => wgpu::PollType::wait_indefinitely(),
+    };
     ctx.device
-        .poll(wgpu::PollType::wait_indefinitely())
+        .poll(wait)
         .map_err(|e| Error::Gpu(format!("waiting for the device: {e}")))?;
     ctx.check_uncaptured()?;
     rx.recv()
@@ -341,11 +371,18 @@ impl<T: GpuReal> GpuSimulation<T> {
         gather.extend_from_slice(&disc.gather.slots);
         let mut node_a = cd.a.clone();
         node_a.push(cd.c1);
-        // loads: per node, in the CPU's accumulation order (group, then entry)
+        // the step row: [1 | load curves | prescribed curves | rotation matrices]
+        let c = &disc.constraints;
+        let n_loads = disc.loads.len();
+        let pres_base = 1 + n_loads;
+        let rot_base = pres_base + c.prescribed.len();
+        let row_stride = rot_base + 9 * c.rotations.len();
+        // loads: per node, in the CPU's accumulation order (group, then entry); a key is
+        // component | (row index of the group's curve value) << 2
         let mut per_node: Vec<Vec<(u32, f64)>> = vec![Vec::new(); nn];
         for (g, grp) in disc.loads.iter().enumerate() {
             for &(dof, v) in &grp.entries {
-                per_node[dof as usize / 3].push(((dof % 3) | ((g as u32) << 2), v));
+                per_node[dof as usize / 3].push(((dof % 3) | (((1 + g) as u32) << 2), v));
             }
         }
         let mut load_key: Vec<u32> = Vec::with_capacity(nn + 1);
@@ -361,24 +398,59 @@ impl<T: GpuReal> GpuSimulation<T> {
         }
         load_key.extend(keys);
         // constraints: what each DOF becomes after the update (rotation > prescribed > fixed,
-        // the order in which the CPU's apply_constraints overwrites)
-        let c = &disc.constraints;
+        // the order in which the CPU's apply_constraints overwrites); an imposed DOF is a
+        // list of terms (coefficient, row index), see the module documentation
         let mut dof_slot = vec![DOF_FREE; 3 * nn];
         for &k in &c.fixed {
             dof_slot[k as usize] = DOF_FIXED;
         }
-        let mut imposed = Vec::new();
+        let mut imposed: Vec<Vec<(f64, u32)>> = c
+            .prescribed_dofs
+            .iter()
+            .map(|_| vec![(0.0, ROW_ONE)])
+            .collect();
+        for (j, (_, entries)) in c.prescribed.iter().enumerate() {
+            for &(k, v) in entries {
+                let i = c
+                    .prescribed_dofs
+                    .binary_search(&k)
+                    .expect("prescribed dof planned");
+                imposed[i].push((v, (pres_base + j) as u32));
+            }
+        }
         for (i, &k) in c.prescribed_dofs.iter().enumerate() {
-            dof_slot[k as usize] = imposed.len() as u32;
-            imposed.push(Imposed::Prescribed(i));
+            dof_slot[k as usize] = i as u32;
         }
         for (r, rot) in c.rotations.iter().enumerate() {
             for &n in &rot.nodes {
+                let x = problem.mesh.nodes[n as usize];
+                let d = [
+                    x[0] - rot.point[0],
+                    x[1] - rot.point[1],
+                    x[2] - rot.point[2],
+                ];
                 for k in 0..3 {
+                    let m = (rot_base + 9 * r + 3 * k) as u32;
                     dof_slot[3 * n as usize + k] = imposed.len() as u32;
-                    imposed.push(Imposed::Rotation(r, n, k));
+                    imposed.push(vec![
+                        (d[0], m),
+                        (d[1], m + 1),
+                        (d[2], m + 2),
+                        (-d[k], ROW_ONE),
+                    ]);
                 }
             }
+        }
+        // CSR: offsets (num_imposed + 1), then the row index of every term; coefficients apart
+        let mut imp_key: Vec<u32> = Vec::with_capacity(imposed.len() + 1);
+        imp_key.push(0);
+        for terms in &imposed {
+            imp_key.push(imp_key.last().unwrap() + terms.len() as u32);
+        }
+        imp_key.extend(imposed.iter().flatten().map(|&(_, i)| i));
+        let mut imp_coef: Vec<f64> = imposed.iter().flatten().map(|&(v, _)| v).collect();
+        if imp_coef.is_empty() {
+            imp_coef.push(0.0); // never read; a binding holds at least one element
         }
         let sp = &disc.saliva;
         let ns = sp.elements.len();
@@ -405,17 +477,16 @@ impl<T: GpuReal> GpuSimulation<T> {
             .map(|g| T::from_f64(g.decay.factor(problem.time.dt)))
             .collect();
 
-        let n_loads = disc.loads.len();
-        let stride = (imposed.len() + ns).max(1);
+        let stride = ns.max(1);
         let params = Params {
             num_elements: ne as u32,
             num_nodes: nn as u32,
             num_saliva: ns as u32,
+            num_imposed: imposed.len() as u32,
+            row_stride: row_stride as u32,
             table_stride: stride as u32,
-            imposed_base: 0,
-            saliva_base: imposed.len() as u32,
-            num_loads: n_loads as u32,
             _pad0: 0,
+            _pad1: 0,
         };
         let step_stride = (ctx.limits.min_uniform_buffer_offset_alignment as u64)
             .max(std::mem::size_of::<StepInfo>() as u64);
@@ -428,10 +499,8 @@ impl<T: GpuReal> GpuSimulation<T> {
                 dhdx.len() * std::mem::size_of::<T>(),
                 "element force blocks",
             ),
-            (
-                MAX_BATCH * stride * std::mem::size_of::<T>(),
-                "per-step table",
-            ),
+            (MAX_BATCH * row_stride * real.load_size(), "per-step rows"),
+            (imp_key.len() * 4, "imposed-value terms"),
             (gather.len() * 4, "gather lists"),
         ];
         for (bytes, what) in biggest {
@@ -482,7 +551,7 @@ impl<T: GpuReal> GpuSimulation<T> {
                 mapped_at_creation: false,
             });
             let table = storage(
-                "per-step table",
+                "per-step saliva rows",
                 bytes_of_slice(&vec![T::ZERO; MAX_BATCH * stride]),
                 wgpu::BufferUsages::COPY_DST,
             );
@@ -502,11 +571,13 @@ impl<T: GpuReal> GpuSimulation<T> {
                 storage("load_key", bytes_of_slice(&load_key), none),
                 storage("load_val", load_bytes(&load_val, real), none),
                 storage(
-                    "curves",
-                    load_bytes(&vec![0.0; MAX_BATCH * n_loads.max(1)], real),
+                    "per-step rows",
+                    load_bytes(&vec![0.0; MAX_BATCH * row_stride], real),
                     wgpu::BufferUsages::COPY_DST,
                 ),
                 storage("dof_slot", bytes_of_slice(&dof_slot), none),
+                storage("imp_key", bytes_of_slice(&imp_key), none),
+                storage("imp_coef", load_bytes(&imp_coef, real), none),
                 [
                     storage("sal_meta", bytes_of_slice(&sal_meta), none),
                     storage("sal_across", bytes_of_slice(&sal_across), none),
@@ -532,8 +603,10 @@ impl<T: GpuReal> GpuSimulation<T> {
             node_a_b,
             load_key_b,
             load_val_b,
-            curves,
+            step_row,
             dof_slot_b,
+            imp_key_b,
+            imp_coef_b,
             sal,
         ) = bufs;
         let [sal_meta_b, sal_across_b, sal_decay_b, sal_prev, sal_state, sal_q] = sal;
@@ -605,7 +678,7 @@ impl<T: GpuReal> GpuSimulation<T> {
             real,
             &[
                 Uniform, UniformDyn, Read, Read, ReadWrite, Read, Read, Read, Read, Read, Read,
-                Read, ReadWrite, Read,
+                Read, Read, Read, ReadWrite,
             ],
             &three(|r| {
                 let (u, up, un) = rot(r);
@@ -620,15 +693,15 @@ impl<T: GpuReal> GpuSimulation<T> {
                     &node_a_b,
                     &load_key_b,
                     &load_val_b,
-                    &table,
+                    &step_row,
                     &dof_slot_b,
+                    &imp_key_b,
+                    &imp_coef_b,
                     &status,
-                    &curves,
                 ]
             }),
         )?;
         Ok(GpuSimulation {
-            reference: problem.mesh.nodes.clone(),
             el,
             element: Kernels {
                 pipeline: pe,
@@ -643,7 +716,7 @@ impl<T: GpuReal> GpuSimulation<T> {
             },
             u_bufs,
             table,
-            curves,
+            step_row,
             step_info,
             status,
             sal_prev,
@@ -652,7 +725,6 @@ impl<T: GpuReal> GpuSimulation<T> {
             step_stride,
             real,
             params,
-            imposed,
             step: 0,
             num_steps: problem.num_steps(),
             dt: problem.time.dt,
@@ -705,74 +777,44 @@ impl<T: GpuReal> GpuSimulation<T> {
         (s as f64 * self.dt, !self.niftysim_timing)
     }
 
-    /// The load-curve values of step `s` (at `t_s`; NiftySim's lag: zero at `s = 0`),
-    /// as `Simulation::assemble_external` evaluates them.
-    fn curve_row(&self, s: usize, out: &mut Vec<f64>) {
+    /// The step row of step `s` (see the module documentation): load curves at `t_s` as
+    /// `Simulation::assemble_external` evaluates them (NiftySim's lag: zero at `s = 0`),
+    /// prescribed curves and rotation matrices at `t_{s+1}` as `apply_constraints` does.
+    fn step_row(&self, s: usize, row: &mut [f64]) {
         let (t, clamp) = self.constraint_time(s);
+        let (tn, clamp_n) = self.constraint_time(s + 1);
+        let c = &self.disc.constraints;
+        let mut i = 0;
+        let mut put = |v: f64| {
+            row[i] = v;
+            i += 1;
+        };
+        put(1.0);
         for grp in &self.disc.loads {
-            out.push(if self.niftysim_timing && s == 0 {
+            put(if self.niftysim_timing && s == 0 {
                 0.0
             } else {
                 grp.curve.value(t, clamp)
             });
         }
+        for (curve, _) in &c.prescribed {
+            put(curve.value(tn, clamp_n));
+        }
+        for r in &c.rotations {
+            r.matrix(tn, clamp_n).iter().flatten().for_each(|&m| put(m));
+        }
+        debug_assert_eq!(i, row.len());
     }
 
-    /// Row of the per-step table for step `s` (see the module documentation).
-    fn table_row(&self, s: usize, row: &mut [T]) {
-        let p = &self.params;
-        // imposed values at t_{s+1}, exactly as apply_constraints computes them
-        let (tn, clamp_n) = self.constraint_time(s + 1);
-        let c = &self.disc.constraints;
-        let mut acc = vec![0.0f64; c.prescribed_dofs.len()];
-        for (curve, entries) in &c.prescribed {
-            let sc = curve.value(tn, clamp_n);
-            for &(k, v) in entries {
-                let i = c
-                    .prescribed_dofs
-                    .binary_search(&k)
-                    .expect("prescribed dof planned");
-                acc[i] += v * sc;
-            }
-        }
-        let base = p.imposed_base as usize;
-        let mut last_rot: Option<(usize, u32, [f64; 3])> = None;
-        for (i, imp) in self.imposed.iter().enumerate() {
-            row[base + i] = match *imp {
-                Imposed::Prescribed(j) => T::from_f64(acc[j]),
-                Imposed::Rotation(r, n, k) => {
-                    let du = match last_rot {
-                        Some((lr, ln, du)) if lr == r && ln == n => du,
-                        _ => {
-                            let du = c.rotations[r].displacement(
-                                &self.reference[n as usize],
-                                tn,
-                                clamp_n,
-                            );
-                            last_rot = Some((r, n, du));
-                            du
-                        }
-                    };
-                    T::from_f64(du[k])
-                }
-            };
-        }
-        // breaking points at t_s (eqs. 6-7 in f64, as saliva_forces does)
+    /// The saliva row of step `s`: the breaking point of every saliva element at `t_s`
+    /// (eqs. 6-7 in f64, as `saliva_forces` evaluates them).
+    fn saliva_row(&self, s: usize, row: &mut [T]) {
         let sp = &self.disc.saliva;
-        if !sp.elements.is_empty() {
-            let t = s as f64 * self.dt;
-            let evaporated: Vec<f64> = sp
-                .groups
-                .iter()
-                .map(|g| g.evaporation.evaporated(t))
-                .collect();
-            let sb = p.saliva_base as usize;
-            for k in 0..sp.elements.len() {
-                let g = sp.group[k] as usize;
-                let m = moisture(sp.initial_moisture[k], evaporated[g]);
-                let prm = &sp.groups[g];
-                row[sb + k] = T::from_f64(breaking_point(m, prm.critical_moisture, prm.k_glue));
-            }
+        let t = s as f64 * self.dt;
+        for (k, z) in row.iter_mut().enumerate().take(sp.elements.len()) {
+            let g = &sp.groups[sp.group[k] as usize];
+            let m = moisture(sp.initial_moisture[k], g.evaporation.evaporated(t));
+            *z = T::from_f64(breaking_point(m, g.critical_moisture, g.k_glue));
         }
     }
 
@@ -783,28 +825,43 @@ impl<T: GpuReal> GpuSimulation<T> {
 
     /// Advances `n` iterations (fewer if the run ends first), [`MAX_BATCH`] per submission.
     /// On divergence the state is the one before the failing step and the error names it.
+    ///
+    /// Batches are pipelined: batch `k + 1` is prepared, recorded and submitted before the
+    /// status of batch `k` is waited for, so the CPU's share of a step (`host/*` in
+    /// `benches/gpu.rs`) overlaps the GPU's. This is safe because every kernel does nothing
+    /// once a failure is recorded (so a batch submitted after a failing one leaves the state
+    /// alone) and because a queued buffer write never affects work submitted before it.
     pub fn step_many(&mut self, n: usize) -> Result<()> {
         let mut left = n.min(self.num_steps.saturating_sub(self.step));
+        let mut pending: Option<InFlight> = None;
         while left > 0 {
             let b = left.min(MAX_BATCH);
-            self.batch(b)?;
+            let next = self.submit_batch(b);
             left -= b;
+            if let Some(prev) = pending.replace(next) {
+                self.finish_batch(prev)?;
+            }
         }
-        Ok(())
+        match pending {
+            Some(last) => self.finish_batch(last),
+            None => Ok(()),
+        }
     }
 
     /// The per-step data of steps `self.step .. self.step + n` (host side, f64 math).
-    fn fill_rows(&self, n: usize, table: &mut Vec<T>, curves: &mut Vec<f64>, info: &mut Vec<u8>) {
+    fn fill_rows(&self, n: usize, table: &mut Vec<T>, rows: &mut Vec<f64>, info: &mut Vec<u8>) {
         let stride = self.params.table_stride as usize;
+        let rs = self.params.row_stride as usize;
         table.clear();
         table.resize(n * stride, T::ZERO);
+        rows.clear();
+        rows.resize(n * rs, 0.0);
         info.clear();
         info.resize(n * self.step_stride as usize, 0);
-        curves.clear();
         for j in 0..n {
             let s = self.step + j;
-            self.table_row(s, &mut table[j * stride..(j + 1) * stride]);
-            self.curve_row(s, curves);
+            self.saliva_row(s, &mut table[j * stride..(j + 1) * stride]);
+            self.step_row(s, &mut rows[j * rs..(j + 1) * rs]);
             let si = StepInfo {
                 step: s as u32,
                 row: j as u32,
@@ -849,20 +906,21 @@ impl<T: GpuReal> GpuSimulation<T> {
     /// the state does not advance. `n` is capped at [`MAX_BATCH`].
     pub fn bench_host(&self, n: usize) -> wgpu::CommandBuffer {
         let n = n.min(MAX_BATCH);
-        let (mut table, mut curves, mut info) = (Vec::new(), Vec::new(), Vec::new());
-        self.fill_rows(n, &mut table, &mut curves, &mut info);
-        std::hint::black_box((&table, &curves, &info));
+        let (mut table, mut rows, mut info) = (Vec::new(), Vec::new(), Vec::new());
+        self.fill_rows(n, &mut table, &mut rows, &mut info);
+        std::hint::black_box((&table, &rows, &info));
         self.encode_steps(n).finish()
     }
 
-    fn batch(&mut self, n: usize) -> Result<()> {
-        let (mut table, mut curves, mut info) = (Vec::new(), Vec::new(), Vec::new());
-        self.fill_rows(n, &mut table, &mut curves, &mut info);
+    /// Uploads the per-step data of `n` steps from `self.step`, submits them with a copy of
+    /// the status behind them and advances `self.step` (provisionally: a failure found by
+    /// [`Self::finish_batch`] sets it back).
+    fn submit_batch(&mut self, n: usize) -> InFlight {
+        let (mut table, mut rows, mut info) = (Vec::new(), Vec::new(), Vec::new());
+        self.fill_rows(n, &mut table, &mut rows, &mut info);
         let q = &self.ctx.queue;
         q.write_buffer(&self.table, 0, bytemuck::cast_slice(&table));
-        if !curves.is_empty() {
-            q.write_buffer(&self.curves, 0, &load_bytes(&curves, self.real));
-        }
+        q.write_buffer(&self.step_row, 0, &load_bytes(&rows, self.real));
         q.write_buffer(&self.step_info, 0, &info);
         let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("status read back"),
@@ -878,14 +936,22 @@ impl<T: GpuReal> GpuSimulation<T> {
             0,
             std::mem::size_of::<Status>() as u64,
         );
-        q.submit([enc.finish()]);
-        let bytes = map_and_read(
+        let index = q.submit([enc.finish()]);
+        self.step += n;
+        self.synced = false;
+        InFlight { staging, index }
+    }
+
+    /// Waits for a submitted batch and reads the status behind it: the first failure of the
+    /// run so far, if any, becomes the error and the current step.
+    fn finish_batch(&mut self, b: InFlight) -> Result<()> {
+        let bytes = map_and_read_after(
             &self.ctx,
-            &staging,
+            &b.staging,
+            Some(b.index),
             [std::mem::size_of::<Status>() as u64].into_iter(),
         )?;
         let st: Status = bytemuck::pod_read_unaligned(&bytes[0]);
-        self.synced = false;
         if st != Status::OK {
             let (step, element, node, reason) = if st.element_step <= st.node_step {
                 (
@@ -911,7 +977,6 @@ impl<T: GpuReal> GpuSimulation<T> {
                 reason: reason.into(),
             });
         }
-        self.step += n;
         Ok(())
     }
 
@@ -920,11 +985,8 @@ impl<T: GpuReal> GpuSimulation<T> {
     /// `node_update` the same `u_{s+1}` each time, so the state does not advance (the
     /// saliva rule, which carries state, is not offered).
     pub fn bench_stage(&mut self, stage: Stage, reps: usize) -> Result<()> {
-        let stride = self.params.table_stride as usize;
-        let mut row = vec![T::ZERO; stride];
-        self.table_row(self.step, &mut row);
-        let mut curves = Vec::new();
-        self.curve_row(self.step, &mut curves);
+        let (mut table, mut rows, mut info) = (Vec::new(), Vec::new(), Vec::new());
+        self.fill_rows(1, &mut table, &mut rows, &mut info);
         let si = StepInfo {
             step: self.step as u32,
             row: 0,
@@ -932,10 +994,8 @@ impl<T: GpuReal> GpuSimulation<T> {
             _pad1: 0,
         };
         let q = &self.ctx.queue;
-        q.write_buffer(&self.table, 0, bytemuck::cast_slice(&row));
-        if !curves.is_empty() {
-            q.write_buffer(&self.curves, 0, &load_bytes(&curves, self.real));
-        }
+        q.write_buffer(&self.table, 0, bytemuck::cast_slice(&table));
+        q.write_buffer(&self.step_row, 0, &load_bytes(&rows, self.real));
         q.write_buffer(&self.step_info, 0, bytemuck::bytes_of(&si));
         let k = match stage {
             Stage::ElementForces => &self.element,
