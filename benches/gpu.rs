@@ -10,6 +10,7 @@
 //!   submitted (`GpuSimulation::bench_host`); a floor under `step/gpu-f32` on any GPU;
 //! - `step/gpu-f32`: full steps (`GpuSimulation::step_many`: element forces, saliva rule if
 //!   any, node update; one submission per call, the status read back at the end);
+//! - `step/gpu-f64`: the same with the f64 kernels, on adapters with `SHADER_F64`;
 //! - `step/cpu-f32` and `step/cpu-f64`: `Simulation::step` on all cores (rayon), the same
 //!   model and state, for comparison.
 //!
@@ -157,6 +158,27 @@ fn bench_gpu(c: &mut Criterion, p: &Problem, label: &str, seeded: bool) {
             })
         });
         g.finish();
+    }
+    drop(sim);
+    match GpuContext::new().and_then(|ctx| GpuSimulation::<f64>::with_context(ctx, p)) {
+        Ok(mut sim) => {
+            if seeded {
+                let u0 = common::seed_displacement(p);
+                sim.set_state(&u0, &u0);
+            }
+            sim.step_many(SEED_STEPS).expect("stable");
+            let mut g = c.benchmark_group("step");
+            g.throughput(Throughput::Elements(ne));
+            g.bench_function(BenchmarkId::new("gpu-f64", label), |b| {
+                b.iter_custom(|iters| {
+                    let t = Instant::now();
+                    sim.step_many(iters as usize).expect("stable");
+                    t.elapsed()
+                })
+            });
+            g.finish();
+        }
+        Err(e) => eprintln!("SKIPPED step/gpu-f64/{label}: {e}"),
     }
 }
 
