@@ -21,6 +21,8 @@ pub const RULE_LITERAL: u32 = 0;
 pub const RULE_LATCHED: u32 = 1;
 /// "No step" in [`Status`] and in a saliva element's first-broken step (`NEVER` in WGSL).
 pub const NEVER: u32 = u32::MAX;
+/// Per-element saliva index of an element that is not a saliva element (`NO_SALIVA` in WGSL).
+pub const NO_SALIVA: u32 = u32::MAX;
 
 /// Sizes and per-step row layout of one model (rows: see [`crate::gpu::sim`]).
 /// Must stay in sync with `struct Params` in `shaders/common/layout.wgsl`.
@@ -106,7 +108,8 @@ pub fn wgsl_constants() -> String {
          const DOF_FIXED: u32 = {DOF_FIXED}u;\n\
          const RULE_LITERAL: u32 = {RULE_LITERAL}u;\n\
          const RULE_LATCHED: u32 = {RULE_LATCHED}u;\n\
-         const NEVER: u32 = {NEVER}u;\n"
+         const NEVER: u32 = {NEVER}u;\n\
+         const NO_SALIVA: u32 = {NO_SALIVA}u;\n"
     )
 }
 
@@ -192,7 +195,7 @@ mod tests {
     #[test]
     fn wgsl_constants_are_the_rust_ones() {
         let module = validate(
-            &kernel_source(Kernel::SalivaForces, ShaderReal::F32),
+            &kernel_source(Kernel::ElementForces, ShaderReal::F32),
             naga::valid::Capabilities::empty(),
         );
         let value = |name: &str| -> u32 {
@@ -212,5 +215,6 @@ mod tests {
         assert_eq!(value("RULE_LITERAL"), RULE_LITERAL);
         assert_eq!(value("RULE_LATCHED"), RULE_LATCHED);
         assert_eq!(value("NEVER"), NEVER);
+        assert_eq!(value("NO_SALIVA"), NO_SALIVA);
     }
 }

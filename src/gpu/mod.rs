@@ -5,7 +5,7 @@
 //! | CPU stage | WGSL kernel |
 //! |---|---|
 //! | `tled::element_forces::element_forces` | `shaders/element_forces.wgsl::element_forces` |
-//! | `tled::saliva_forces::saliva_forces` | `shaders/saliva_forces.wgsl::saliva_forces` |
+//! | `tled::saliva_forces::saliva_forces` | `shaders/element_forces.wgsl::saliva_forces` (called by the `element_forces` kernel for each saliva element) |
 //! | `tled::node_update::node_update` + `tled::solver::apply_constraints` | `shaders/node_update.wgsl::node_update` |
 //!
 //! - [`context`]: instance from the environment, adapter, device with the adapter's limits;

@@ -52,10 +52,10 @@ const COMMON: [&str; 4] = [
 /// The compute kernels; each has one entry point named like the CPU stage it mirrors.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kernel {
-    /// `shaders/element_forces.wgsl`, twin of `tled::element_forces::element_forces`.
+    /// `shaders/element_forces.wgsl`, twin of `tled::element_forces::element_forces`
+    /// followed, for saliva elements, by `tled::saliva_forces::saliva_forces` (a WGSL
+    /// function of the same name in the same file: one dispatch per step for both).
     ElementForces,
-    /// `shaders/saliva_forces.wgsl`, twin of `tled::saliva_forces::saliva_forces`.
-    SalivaForces,
     /// `shaders/node_update.wgsl`, twin of `tled::node_update::node_update` +
     /// `tled::solver::apply_constraints`.
     NodeUpdate,
@@ -66,7 +66,6 @@ pub enum Kernel {
 
 pub const ALL_KERNELS: &[Kernel] = &[
     Kernel::ElementForces,
-    Kernel::SalivaForces,
     Kernel::NodeUpdate,
     Kernel::FunctionTests,
 ];
@@ -75,7 +74,6 @@ impl Kernel {
     pub fn name(self) -> &'static str {
         match self {
             Kernel::ElementForces => "element_forces",
-            Kernel::SalivaForces => "saliva_forces",
             Kernel::NodeUpdate => "node_update",
             Kernel::FunctionTests => "function_tests",
         }
@@ -83,7 +81,6 @@ impl Kernel {
     fn body(self) -> &'static str {
         match self {
             Kernel::ElementForces => include_str!("../../shaders/element_forces.wgsl"),
-            Kernel::SalivaForces => include_str!("../../shaders/saliva_forces.wgsl"),
             Kernel::NodeUpdate => include_str!("../../shaders/node_update.wgsl"),
             Kernel::FunctionTests => include_str!("../../shaders/function_tests.wgsl"),
         }

@@ -6,11 +6,12 @@
 //! [`Error::Diverged`] naming the step, time and element or node, with the state left as it
 //! was before the failing step.
 //!
-//! One batch of steps is one queue submission with one compute pass: for every step the
-//! `element_forces`, `saliva_forces` (if the model has saliva) and `node_update` kernels
-//! are dispatched; the displacement lives in three buffers used in rotation
-//! (`u_s = buf[s % 3]`, `u_{s-1} = buf[(s + 2) % 3]`, `u_{s+1} = buf[(s + 1) % 3]`), so
-//! nothing is copied between steps. Only the 16-byte [`Status`] is read back after a
+//! One batch of steps is one queue submission with one compute pass: for every step two
+//! kernels are dispatched, `element_forces` (which also runs the `saliva_forces` stage on
+//! the saliva elements' blocks) and `node_update`. The displacement lives in three buffers
+//! used in rotation (`u_s = buf[s % 3]`, `u_{s-1} = buf[(s + 2) % 3]`, `u_{s+1} =
+//! buf[(s + 1) % 3]`) and the saliva state in two (read `s % 2`, write `(s + 1) % 2`), so
+//! nothing is copied between steps and a failing step leaves the state before it. Only the 16-byte [`Status`] is read back after a
 //! batch; the state is read back when asked for ([`GpuSimulation::sync`]).
 //!
 //! Everything that depends on time only is evaluated in f64 by Rust, once per step of a
@@ -96,9 +97,16 @@ struct InFlight {
 
 struct Kernels {
     pipeline: wgpu::ComputePipeline,
-    /// One bind group per rotation of the displacement buffers (`s % 3`).
+    /// One bind group per rotation of the displacement (and saliva state) buffers.
     groups: Vec<wgpu::BindGroup>,
     workgroups: u32,
+}
+
+impl Kernels {
+    /// The bind group of step `s`.
+    fn group(&self, s: usize) -> &wgpu::BindGroup {
+        &self.groups[s % self.groups.len()]
+    }
 }
 
 pub struct GpuSimulation<T: GpuReal> {
@@ -106,7 +114,6 @@ pub struct GpuSimulation<T: GpuReal> {
     ctx: GpuContext,
     el: ElementArrays<T>,
     element: Kernels,
-    saliva_k: Option<Kernels>,
     node: Kernels,
     u_bufs: [wgpu::Buffer; 3],
     table: wgpu::Buffer,
@@ -114,9 +121,10 @@ pub struct GpuSimulation<T: GpuReal> {
     step_row: wgpu::Buffer,
     step_info: wgpu::Buffer,
     status: wgpu::Buffer,
-    sal_prev: wgpu::Buffer,
-    sal_state: wgpu::Buffer,
-    sal_q: wgpu::Buffer,
+    /// Saliva state, double-buffered by step parity: per saliva element the previous
+    /// modified force (24) and Q (1); broken and first broken step (2 u32).
+    sal_real: [wgpu::Buffer; 2],
+    sal_state: [wgpu::Buffer; 2],
     step_stride: u64,
     real: ShaderReal,
     params: Params,
@@ -454,27 +462,44 @@ impl<T: GpuReal> GpuSimulation<T> {
         }
         let sp = &disc.saliva;
         let ns = sp.elements.len();
-        let sal_meta: Vec<u32> = (0..ns)
-            .flat_map(|k| {
-                let g = sp.group[k];
-                let rule = match sp.groups[g as usize].rule {
-                    BreakingRule::Literal => RULE_LITERAL,
-                    BreakingRule::Latched => RULE_LATCHED,
-                };
-                [sp.elements[k], g, rule]
-            })
-            .collect();
-        let sal_across: Vec<T> = sp
+        // [saliva index per element (NO_SALIVA if none) | group, rule per saliva element]
+        let mut sal_meta = vec![NO_SALIVA; ne];
+        for (k, &e) in sp.elements.iter().enumerate() {
+            if sal_meta[e as usize] != NO_SALIVA {
+                return Err(Error::Gpu(format!(
+                    "element {e} is listed twice among the saliva elements"
+                )));
+            }
+            sal_meta[e as usize] = k as u32;
+        }
+        for k in 0..ns {
+            let g = sp.group[k];
+            let rule = match sp.groups[g as usize].rule {
+                BreakingRule::Literal => RULE_LITERAL,
+                BreakingRule::Latched => RULE_LATCHED,
+            };
+            sal_meta.extend([g, rule]);
+        }
+        // [unit axis across per saliva element (3) | decay factor per group]
+        let mut sal_const: Vec<T> = sp
             .across
             .iter()
             .flatten()
             .map(|&x| T::from_f64(x))
             .collect();
+        sal_const.extend(
+            sp.groups
+                .iter()
+                .map(|g| T::from_f64(g.decay.factor(problem.time.dt))),
+        );
         let saliva = SalivaState::<T>::new(sp, problem.time.dt);
-        let sal_decay: Vec<T> = sp
-            .groups
-            .iter()
-            .map(|g| T::from_f64(g.decay.factor(problem.time.dt)))
+        // initial saliva state: no previous force, Q = 1, intact, never broken
+        let sal_real0: Vec<T> = (0..ns)
+            .flat_map(|_| {
+                let mut v = [T::ZERO; 25];
+                v[24] = T::ONE;
+                v
+            })
             .collect();
 
         let stride = ns.max(1);
@@ -521,7 +546,7 @@ impl<T: GpuReal> GpuSimulation<T> {
             }
             Ok(g as u32)
         };
-        let (wg_e, wg_n, wg_s) = (wg(ne)?, wg(nn)?, wg(ns)?);
+        let (wg_e, wg_n) = (wg(ne)?, wg(nn)?);
 
         let bufs = ctx.scoped("uploading the model", || {
             let storage = |label: &str, bytes: Vec<u8>, extra: wgpu::BufferUsages| {
@@ -580,11 +605,11 @@ impl<T: GpuReal> GpuSimulation<T> {
                 storage("imp_coef", load_bytes(&imp_coef, real), none),
                 [
                     storage("sal_meta", bytes_of_slice(&sal_meta), none),
-                    storage("sal_across", bytes_of_slice(&sal_across), none),
-                    storage("sal_decay", bytes_of_slice(&sal_decay), none),
-                    storage("sal_prev", bytes_of_slice(&vec![T::ZERO; 24 * ns]), rw),
-                    storage("sal_state", bytes_of_slice(&[0u32, NEVER].repeat(ns)), rw),
-                    storage("sal_q", bytes_of_slice(&vec![T::ONE; ns]), rw),
+                    storage("sal_const", bytes_of_slice(&sal_const), none),
+                    storage("sal_real0", bytes_of_slice(&sal_real0), rw),
+                    storage("sal_real1", bytes_of_slice(&sal_real0), rw),
+                    storage("sal_state0", bytes_of_slice(&[0u32, NEVER].repeat(ns)), rw),
+                    storage("sal_state1", bytes_of_slice(&[0u32, NEVER].repeat(ns)), rw),
                 ],
             )
         })?;
@@ -609,68 +634,45 @@ impl<T: GpuReal> GpuSimulation<T> {
             imp_coef_b,
             sal,
         ) = bufs;
-        let [sal_meta_b, sal_across_b, sal_decay_b, sal_prev, sal_state, sal_q] = sal;
+        let [sal_meta_b, sal_const_b, sal_real0, sal_real1, sal_state0, sal_state1] = sal;
+        let sal_real = [sal_real0, sal_real1];
+        let sal_state = [sal_state0, sal_state1];
         use Bind::*;
         let rot = |r: usize| (&u_bufs[r], &u_bufs[(r + 2) % 3], &u_bufs[(r + 1) % 3]);
+        // bind group g = s % 6: displacement rotation g % 3, saliva parity g % 2
         let (pe, ge) = build_kernel(
             &ctx,
             Kernel::ElementForces,
             "element_forces",
             real,
             &[
-                Uniform, UniformDyn, Read, Read, Read, Read, Read, ReadWrite, ReadWrite,
+                Uniform, UniformDyn, Read, Read, Read, Read, Read, ReadWrite, ReadWrite, Read,
+                Read, Read, Read, ReadWrite, Read, ReadWrite,
             ],
-            &three(|r| {
-                vec![
-                    &params_buf,
-                    &step_info,
-                    rot(r).0,
-                    &conn_b,
-                    &dhdx_b,
-                    &gamma_b,
-                    &escal_b,
-                    &elem_f,
-                    &status,
-                ]
-            }),
-        )?;
-        let saliva_k = if ns > 0 {
-            let (ps, gs) = build_kernel(
-                &ctx,
-                Kernel::SalivaForces,
-                "saliva_forces",
-                real,
-                &[
-                    Uniform, UniformDyn, Read, Read, Read, ReadWrite, ReadWrite, Read, Read, Read,
-                    Read, ReadWrite, ReadWrite, ReadWrite,
-                ],
-                &three(|r| {
+            &(0..6)
+                .map(|g| {
+                    let p = g % 2;
                     vec![
                         &params_buf,
                         &step_info,
-                        rot(r).0,
+                        rot(g % 3).0,
                         &conn_b,
                         &dhdx_b,
+                        &gamma_b,
+                        &escal_b,
                         &elem_f,
                         &status,
                         &table,
                         &sal_meta_b,
-                        &sal_across_b,
-                        &sal_decay_b,
-                        &sal_prev,
-                        &sal_state,
-                        &sal_q,
+                        &sal_const_b,
+                        &sal_real[p],
+                        &sal_real[1 - p],
+                        &sal_state[p],
+                        &sal_state[1 - p],
                     ]
-                }),
-            )?;
-            Some(Kernels {
-                pipeline: ps,
-                groups: gs,
-                workgroups: wg_s,
-            })
-        } else {
-            None
-        };
+                })
+                .collect::<Vec<_>>(),
+        )?;
         let (pn, gn) = build_kernel(
             &ctx,
             Kernel::NodeUpdate,
@@ -708,7 +710,6 @@ impl<T: GpuReal> GpuSimulation<T> {
                 groups: ge,
                 workgroups: wg_e,
             },
-            saliva_k,
             node: Kernels {
                 pipeline: pn,
                 groups: gn,
@@ -719,9 +720,8 @@ impl<T: GpuReal> GpuSimulation<T> {
             step_row,
             step_info,
             status,
-            sal_prev,
+            sal_real,
             sal_state,
-            sal_q,
             step_stride,
             real,
             params,
@@ -882,18 +882,11 @@ impl<T: GpuReal> GpuSimulation<T> {
                 timestamp_writes: None,
             });
             for j in 0..n {
-                let r = (self.step + j) % 3;
+                let s = self.step + j;
                 let off = [(j as u64 * self.step_stride) as u32];
-                for k in [
-                    Some(&self.element),
-                    self.saliva_k.as_ref(),
-                    Some(&self.node),
-                ]
-                .into_iter()
-                .flatten()
-                {
+                for k in [&self.element, &self.node] {
                     pass.set_pipeline(&k.pipeline);
-                    pass.set_bind_group(0, &k.groups[r], &off);
+                    pass.set_bind_group(0, k.group(s), &off);
                     pass.dispatch_workgroups(k.workgroups, 1, 1);
                 }
             }
@@ -1005,7 +998,7 @@ impl<T: GpuReal> GpuSimulation<T> {
         {
             let mut pass = enc.begin_compute_pass(&Default::default());
             pass.set_pipeline(&k.pipeline);
-            pass.set_bind_group(0, &k.groups[self.step % 3], &[0]);
+            pass.set_bind_group(0, k.group(self.step), &[0]);
             for _ in 0..reps {
                 pass.dispatch_workgroups(k.workgroups, 1, 1);
             }
@@ -1034,9 +1027,8 @@ impl<T: GpuReal> GpuSimulation<T> {
             &[
                 &self.u_bufs[s % 3],
                 &self.u_bufs[(s + 2) % 3],
-                &self.sal_prev,
-                &self.sal_state,
-                &self.sal_q,
+                &self.sal_real[s % 2],
+                &self.sal_state[s % 2],
             ],
         )?;
         let nn = self.disc.num_nodes;
@@ -1049,21 +1041,20 @@ impl<T: GpuReal> GpuSimulation<T> {
         let sp = &self.disc.saliva;
         let ns = sp.elements.len();
         if ns > 0 {
-            let prev: Vec<T> =
-                bytemuck::pod_collect_to_vec(&out[2][..24 * ns * std::mem::size_of::<T>()]);
+            let real: Vec<T> =
+                bytemuck::pod_collect_to_vec(&out[2][..25 * ns * std::mem::size_of::<T>()]);
             let state: Vec<u32> = bytemuck::pod_collect_to_vec(&out[3][..8 * ns]);
-            let q: Vec<T> = bytemuck::pod_collect_to_vec(&out[4][..ns * std::mem::size_of::<T>()]);
             let st = &mut self.saliva;
             for k in 0..ns {
                 st.previous[k] =
-                    std::array::from_fn(|a| std::array::from_fn(|i| prev[24 * k + 3 * a + i]));
+                    std::array::from_fn(|a| std::array::from_fn(|i| real[25 * k + 3 * a + i]));
                 st.broken[k] = state[2 * k] != 0;
                 st.broken_at[k] = if state[2 * k + 1] == NEVER {
                     f64::NAN
                 } else {
                     state[2 * k + 1] as f64 * self.dt
                 };
-                st.q[k] = q[k].to_f64();
+                st.q[k] = real[25 * k + 24].to_f64();
             }
             if s > 0 {
                 // moisture and Z of the last step executed, as saliva_forces records them
