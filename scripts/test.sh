@@ -77,7 +77,12 @@ if [ "${STICKY_LIPS_REQUIRE_GPU:-}" = "1" ]; then
   cmp "$OUT/cantilever_gpu/final.vtu" "$OUT/cantilever_f32/final.vtu"
   "$BIN" run "$SHARED/oracle/niftysim/block4_compress.xml" --niftysim-compat --out "$OUT/block4_gpu" \
     --backend gpu --precision f64 --quiet
-  GPU_OUTS="cantilever_gpu block4_gpu"
+  # saliva through the CLI: every frame of the sticky slabs (all 25 saliva elements break) must
+  # equal the CPU f32 run's byte for byte
+  "$BIN" run examples/sticky_slabs.toml --out "$OUT/sticky_slabs_gpu" --backend gpu --precision f32 --quiet
+  "$BIN" run examples/sticky_slabs.toml --out "$OUT/sticky_slabs_f32" --precision f32 --quiet
+  for f in "$OUT"/sticky_slabs_f32/*.vtu; do cmp "$f" "$OUT/sticky_slabs_gpu/$(basename "$f")"; done
+  GPU_OUTS="cantilever_gpu block4_gpu sticky_slabs_gpu"
 fi
 "$BIN" equilibrium examples/cantilever.toml --out "$OUT/cantilever_static"
 "$BIN" run examples/sticky_slabs.toml --out "$OUT/sticky_slabs" --quiet
