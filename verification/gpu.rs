@@ -57,7 +57,8 @@ fn ulps(a: f32, b: f32) -> u32 {
     (key(a) as i64 - key(b) as i64).unsigned_abs() as u32
 }
 
-fn rand_mat(rng: &mut ChaCha8Rng, scale: f32) -> [[f32; 3]; 3] {
+/// An `R x C` array of `scale * U(-1, 1)` draws, row by row.
+fn rand_mat<const R: usize, const C: usize>(rng: &mut ChaCha8Rng, scale: f32) -> [[f32; C]; R] {
     std::array::from_fn(|_| std::array::from_fn(|_| scale * rng.random_range(-1.0f32..1.0)))
 }
 
@@ -195,13 +196,10 @@ fn wgsl_functions_match_rust_f32() {
     let mut input = Vec::with_capacity(84 * RECORDS);
     let mut recs = Vec::new();
     for _ in 0..RECORDS {
-        let ue: [[f32; 3]; 8] =
-            std::array::from_fn(|_| std::array::from_fn(|_| 1e-3 * rng.random_range(-1.0f32..1.0)));
-        let d: [[f32; 3]; 8] =
-            std::array::from_fn(|_| std::array::from_fn(|_| 50.0 * rng.random_range(-1.0f32..1.0)));
+        let ue: [[f32; 3]; 8] = rand_mat(&mut rng, 1e-3);
+        let d: [[f32; 3]; 8] = rand_mat(&mut rng, 50.0);
         let w = rng.random_range(1e-7f32..1e-6);
-        let gamma: [[f32; 4]; 8] =
-            std::array::from_fn(|_| std::array::from_fn(|_| rng.random_range(-1.0f32..1.0)));
+        let gamma: [[f32; 4]; 8] = rand_mat(&mut rng, 1.0);
         let k = rng.random_range(1e-2f32..1.0);
         let mu = rng.random_range(500.0f32..8000.0);
         let bulk = rng.random_range(5e3f32..2e5);
@@ -242,10 +240,8 @@ fn wgsl_functions_match_rust_f32() {
         let rule = (r % 2) as u32;
         let decay = 0.99f32;
         let broken = (r / 2) % 2 == 1;
-        let f: [[f32; 3]; 8] =
-            std::array::from_fn(|_| std::array::from_fn(|_| rng.random_range(-1.0f32..1.0)));
-        let p: [[f32; 3]; 8] =
-            std::array::from_fn(|_| std::array::from_fn(|_| rng.random_range(-1.0f32..1.0)));
+        let f: [[f32; 3]; 8] = rand_mat(&mut rng, 1.0);
+        let p: [[f32; 3]; 8] = rand_mat(&mut rng, 1.0);
         input.extend(h.as_flattened());
         input.extend(y);
         input.extend([z, rule as f32, decay, if broken { 1.0 } else { 0.0 }]);
@@ -337,12 +333,9 @@ fn kernels_bit_exact(ctx: &GpuContext) -> bool {
     let mut input = Vec::with_capacity(84 * n);
     let mut recs = Vec::new();
     for _ in 0..n {
-        let ue: [[f32; 3]; 8] =
-            std::array::from_fn(|_| std::array::from_fn(|_| 1e-3 * rng.random_range(-1.0f32..1.0)));
-        let d: [[f32; 3]; 8] =
-            std::array::from_fn(|_| std::array::from_fn(|_| 50.0 * rng.random_range(-1.0f32..1.0)));
-        let gamma: [[f32; 4]; 8] =
-            std::array::from_fn(|_| std::array::from_fn(|_| rng.random_range(-1.0f32..1.0)));
+        let ue: [[f32; 3]; 8] = rand_mat(&mut rng, 1e-3);
+        let d: [[f32; 3]; 8] = rand_mat(&mut rng, 50.0);
+        let gamma: [[f32; 4]; 8] = rand_mat(&mut rng, 1.0);
         input.extend(ue.as_flattened());
         input.extend(d.as_flattened());
         input.push(5e-7);

@@ -45,14 +45,14 @@ use crate::error::{Error, Result};
 use crate::gpu::context::GpuContext;
 use crate::gpu::layout::*;
 use crate::gpu::shaders::{kernel_source, Kernel, ShaderReal};
-use crate::material::saliva::{breaking_point, moisture, BreakingRule};
+use crate::material::saliva::BreakingRule;
 use crate::problem::Problem;
 use crate::real::Real;
 use crate::tled::element_forces::{element_forces, ElementArrays};
 use crate::tled::node_update::{gather_all, CentralDifference};
 use crate::tled::precompute::Discretisation;
 use crate::tled::saliva_forces::SalivaState;
-use crate::tled::solver::Energies;
+use crate::tled::solver::{constraint_time, load_value, Energies};
 use std::num::NonZeroU64;
 use wgpu::util::DeviceExt;
 
@@ -771,18 +771,11 @@ impl<T: GpuReal> GpuSimulation<T> {
         self.el.len()
     }
 
-    /// The time at which load curves are evaluated for index `s`, and whether to clamp
-    /// (the CPU's `Simulation::constraint_time`).
-    fn constraint_time(&self, s: usize) -> (f64, bool) {
-        (s as f64 * self.dt, !self.niftysim_timing)
-    }
-
-    /// The step row of step `s` (see the module documentation): load curves at `t_s` as
-    /// `Simulation::assemble_external` evaluates them (NiftySim's lag: zero at `s = 0`),
+    /// The step row of step `s` (see the module documentation): load curves as
+    /// `Simulation::assemble_external` applies them at iteration `s` (`solver::load_value`),
     /// prescribed curves and rotation matrices at `t_{s+1}` as `apply_constraints` does.
-    fn step_row(&self, s: usize, row: &mut [f64]) {
-        let (t, clamp) = self.constraint_time(s);
-        let (tn, clamp_n) = self.constraint_time(s + 1);
+    fn fill_step_row(&self, s: usize, row: &mut [f64]) {
+        let (tn, clamp_n) = constraint_time(s + 1, self.dt, self.niftysim_timing);
         let c = &self.disc.constraints;
         let mut i = 0;
         let mut put = |v: f64| {
@@ -791,11 +784,7 @@ impl<T: GpuReal> GpuSimulation<T> {
         };
         put(1.0);
         for grp in &self.disc.loads {
-            put(if self.niftysim_timing && s == 0 {
-                0.0
-            } else {
-                grp.curve.value(t, clamp)
-            });
+            put(load_value(&grp.curve, s, self.dt, self.niftysim_timing));
         }
         for (curve, _) in &c.prescribed {
             put(curve.value(tn, clamp_n));
@@ -807,14 +796,14 @@ impl<T: GpuReal> GpuSimulation<T> {
     }
 
     /// The saliva row of step `s`: the breaking point of every saliva element at `t_s`
-    /// (eqs. 6-7 in f64, as `saliva_forces` evaluates them).
-    fn saliva_row(&self, s: usize, row: &mut [T]) {
+    /// (eqs. 6-7 in f64, as `saliva_forces` evaluates them); `evaporated` is scratch, one
+    /// per saliva group.
+    fn fill_saliva_row(&self, s: usize, row: &mut [T], evaporated: &mut [f64]) {
         let sp = &self.disc.saliva;
-        let t = s as f64 * self.dt;
+        sp.evaporated_into(s as f64 * self.dt, evaporated);
         for (k, z) in row.iter_mut().enumerate().take(sp.elements.len()) {
-            let g = &sp.groups[sp.group[k] as usize];
-            let m = moisture(sp.initial_moisture[k], g.evaporation.evaporated(t));
-            *z = T::from_f64(breaking_point(m, g.critical_moisture, g.k_glue));
+            let (_, zk) = sp.moisture_and_breaking_point(k, evaporated[sp.group[k] as usize]);
+            *z = T::from_f64(zk);
         }
     }
 
@@ -858,10 +847,11 @@ impl<T: GpuReal> GpuSimulation<T> {
         rows.resize(n * rs, 0.0);
         info.clear();
         info.resize(n * self.step_stride as usize, 0);
+        let mut evaporated = vec![0.0; self.disc.saliva.groups.len()];
         for j in 0..n {
             let s = self.step + j;
-            self.saliva_row(s, &mut table[j * stride..(j + 1) * stride]);
-            self.step_row(s, &mut rows[j * rs..(j + 1) * rs]);
+            self.fill_saliva_row(s, &mut table[j * stride..(j + 1) * stride], &mut evaporated);
+            self.fill_step_row(s, &mut rows[j * rs..(j + 1) * rs]);
             let si = StepInfo {
                 step: s as u32,
                 row: j as u32,
@@ -1058,12 +1048,10 @@ impl<T: GpuReal> GpuSimulation<T> {
             }
             if s > 0 {
                 // moisture and Z of the last step executed, as saliva_forces records them
-                let t = (s - 1) as f64 * self.dt;
+                sp.evaporated_into((s - 1) as f64 * self.dt, &mut st.evaporated);
                 for k in 0..ns {
-                    let g = &sp.groups[sp.group[k] as usize];
-                    let m = moisture(sp.initial_moisture[k], g.evaporation.evaporated(t));
-                    st.moisture[k] = m;
-                    st.z[k] = breaking_point(m, g.critical_moisture, g.k_glue);
+                    let g = sp.group[k] as usize;
+                    (st.moisture[k], st.z[k]) = sp.moisture_and_breaking_point(k, st.evaporated[g]);
                 }
             }
         }

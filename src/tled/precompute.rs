@@ -43,6 +43,23 @@ pub struct SalivaPlan {
     pub groups: Vec<SalivaParams>,
 }
 
+impl SalivaPlan {
+    /// Moisture `tM` (eq. 6) and breaking point `Z` (eq. 7) of saliva element `k`, given
+    /// the amount its group has evaporated; the values both backends step with.
+    pub fn moisture_and_breaking_point(&self, k: usize, evaporated: f64) -> (f64, f64) {
+        let g = &self.groups[self.group[k] as usize];
+        let m = saliva::moisture(self.initial_moisture[k], evaporated);
+        (m, saliva::breaking_point(m, g.critical_moisture, g.k_glue))
+    }
+
+    /// The amount each group has evaporated by time `t` (um), into `out` (one per group).
+    pub fn evaporated_into(&self, t: f64, out: &mut [f64]) {
+        for (ev, g) in out.iter_mut().zip(&self.groups) {
+            *ev = g.evaporation.evaporated(t);
+        }
+    }
+}
+
 /// The discretised model in `f64`: the single source of every derived constant that the
 /// CPU stepping (in either precision), the static solver and the stability analysis use.
 #[derive(Clone, Debug)]

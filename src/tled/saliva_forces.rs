@@ -3,7 +3,7 @@
 //! (eq. 6), breaking point (eq. 7) and stretch across the layer (eqs. 8-10) at this step.
 //! The equations themselves live in `material::saliva`; this stage holds their state.
 
-use crate::material::saliva::{apply_breaking_rule, breaking_point, moisture, stretch_across};
+use crate::material::saliva::{apply_breaking_rule, breaking_point, stretch_across};
 use crate::real::Real;
 use crate::tled::element_forces::ElementArrays;
 use crate::tled::precompute::SalivaPlan;
@@ -15,7 +15,7 @@ pub struct SalivaState<T> {
     decay: Vec<T>,
     /// Evaporated depth per group at the current step (um); kept here so the step
     /// allocates nothing.
-    evaporated: Vec<f64>,
+    pub(crate) evaporated: Vec<f64>,
     /// The modified force `F` of the previous step (8x3 per element).
     pub previous: Vec<[[T; 3]; 8]>,
     /// Broken at the last step (for `literal`: `Q >= Z` now; for `latched`: ever).
@@ -67,9 +67,7 @@ pub fn saliva_forces<T: Real>(
     elem_f: &mut [[[T; 3]; 8]],
     t: f64,
 ) {
-    for (ev, g) in state.evaporated.iter_mut().zip(&plan.groups) {
-        *ev = g.evaporation.evaporated(t);
-    }
+    plan.evaporated_into(t, &mut state.evaporated);
     for k in 0..plan.elements.len() {
         let e = plan.elements[k] as usize;
         let g = plan.group[k] as usize;
@@ -86,8 +84,7 @@ pub fn saliva_forces<T: Real>(
             }
         }
         let q = stretch_across(&h, &state.across[k]);
-        let m = moisture(plan.initial_moisture[k], state.evaporated[g]);
-        let z = breaking_point(m, params.critical_moisture, params.k_glue);
+        let (m, z) = plan.moisture_and_breaking_point(k, state.evaporated[g]);
         let broken = apply_breaking_rule(
             q,
             T::from_f64(z),

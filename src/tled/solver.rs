@@ -11,6 +11,7 @@
 use crate::error::{Error, Result};
 use crate::problem::Problem;
 use crate::real::Real;
+use crate::tled::boundary::LoadCurve;
 use crate::tled::element_forces::{element_forces, ElementArrays};
 use crate::tled::node_update::{gather_all, node_update, CentralDifference};
 use crate::tled::precompute::Discretisation;
@@ -174,24 +175,16 @@ impl<T: Real> Simulation<T> {
         Ok(())
     }
 
-    /// The time at which load curves are evaluated for index `s`, and whether to clamp.
-    /// NiftySim's timing is relative time `s dt / T` unclamped, i.e. the same absolute
-    /// time when curves span the whole run.
     fn constraint_time(&self, s: usize) -> (f64, bool) {
-        (s as f64 * self.dt, !self.niftysim_timing)
+        constraint_time(s, self.dt, self.niftysim_timing)
     }
 
     fn assemble_external(&mut self, s: usize) {
         for r in self.r_ext.iter_mut() {
             *r = [T::ZERO; 3];
         }
-        // NiftySim's forces lag: iteration s uses the value at s dt, and zero at s = 0.
-        if self.niftysim_timing && s == 0 {
-            return;
-        }
-        let (t, clamp) = self.constraint_time(s);
         for g in &self.disc.loads {
-            let c = g.curve.value(t, clamp);
+            let c = load_value(&g.curve, s, self.dt, self.niftysim_timing);
             for &(dof, v) in &g.entries {
                 self.r_ext[dof as usize / 3][dof as usize % 3] += T::from_f64(v * c);
             }
@@ -240,6 +233,24 @@ impl<T: Real> Simulation<T> {
     pub fn total_time(&self) -> f64 {
         self.total_time
     }
+}
+
+/// The time at which load curves are evaluated for iteration index `s`, and whether to
+/// clamp. NiftySim's timing is relative time `s dt / T` unclamped, i.e. the same absolute
+/// time when curves span the whole run. Shared by both backends.
+pub fn constraint_time(s: usize, dt: f64, niftysim_timing: bool) -> (f64, bool) {
+    (s as f64 * dt, !niftysim_timing)
+}
+
+/// The value of a load curve that iteration `s` applies to its external loads. NiftySim's
+/// forces lag: iteration `s` uses the value at `s dt`, and zero at `s = 0`. Shared by both
+/// backends.
+pub fn load_value(curve: &LoadCurve, s: usize, dt: f64, niftysim_timing: bool) -> f64 {
+    if niftysim_timing && s == 0 {
+        return 0.0;
+    }
+    let (t, clamp) = constraint_time(s, dt, niftysim_timing);
+    curve.value(t, clamp)
 }
 
 /// Sets every constrained DOF of `u` at time `t`: fixed DOFs to zero, prescribed DOFs to
