@@ -11,9 +11,12 @@
 # 3. `benches/gpu.rs` (criterion) on blocks of 1k, 8k, 64k and 512k hexahedra and the mouth,
 #    the CPU ids on 2 threads (RAYON_NUM_THREADS=2; targets: >= 1e9 element-updates/s at 512k,
 #    >= 20x the CPU's 2-thread step).
+# 4. scripts/gpu_bench_report.py: the table (time, element-updates/s, steps/s) and a verdict on
+#    each target from 2. and 3. ("not measured" where a figure is missing).
 # SIZES and SCENE_TIMEOUT (s, default 120) override for a dry run (e.g. on lavapipe).
 # Each part has its own time limit and a failing part does not stop the others. At most 8
-# files come back from $OUT: env.txt, verification_gpu.log, paper_scene.log, bench_gpu.log.
+# files come back from $OUT: env.txt, verification_gpu.log, paper_scene.log, bench_gpu.log,
+# report.md.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$(pwd)
@@ -38,6 +41,7 @@ if [ "$MANIFEST" != "$ROOT" ] && [ ! -e "$MANIFEST" ]; then
 fi
 export STICKY_LIPS_SHARED="$B/shared" WGPU_BACKEND="${WGPU_BACKEND:-vulkan}" STICKY_LIPS_REQUIRE_GPU=1
 export CRITERION_HOME=/tmp/criterion
+rm -rf "$CRITERION_HOME" /tmp/scene-*  # a rerun on a warm machine reports this run only
 
 {
   echo "bundle commit: $(cat "$B/commit")"
@@ -82,6 +86,10 @@ part "criterion: benches/gpu.rs (CPU ids on 2 threads)"
 RAYON_NUM_THREADS=2 STICKY_LIPS_BENCH_SIZES="${SIZES:-1000,8000,64000,512k,mouth}" \
   timeout 330 "$B/bin/bench-gpu" --bench 2>&1 | grep -av XDG_RUNTIME_DIR |
   grep -a -E 'gpu benchmarks on|SKIPPED|^[a-z_]+/|time:|thrpt:' | tee "$R/bench_gpu.log"
+
+part "report: the issue-6 targets"
+python3 scripts/gpu_bench_report.py "$CRITERION_HOME" --cpu-threads 2 \
+  --scene /tmp/scene-gpu-f32 --scene /tmp/scene-gpu-f64 --scene /tmp/scene-cpu-f64 2>&1 | tee "$R/report.md"
 
 part "done"
 ls -la "$R"

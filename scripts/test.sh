@@ -47,6 +47,9 @@ if ! cmp -s verification/reference/skfem_neohookean.json "$tmpref/committed.json
   exit 1
 fi
 
+step "scripts/gpu_bench_report.py (the GPU benchmark's target verdicts) on made-up results"
+"$PY" -m pytest -q scripts/test_gpu_bench_report.py
+
 step "cargo fmt --check"
 cargo fmt --all -- --check
 
