@@ -11,6 +11,9 @@
 //! - `step/gpu-f32`: full steps (`GpuSimulation::step_many`: element forces, saliva rule if
 //!   any, node update; one submission per call, the status read back at the end);
 //! - `step/gpu-f64`: the same with the f64 kernels, on adapters with `SHADER_F64`;
+//! - `step/gpu-f32only`: on adapters with `SHADER_F64`, the f32 kernels without the f64
+//!   cube-root refinement (what adapters without it run; `gpu-f32` there returns the CPU's
+//!   f32 bits);
 //! - `step/cpu-f32` and `step/cpu-f64`: `Simulation::step` on all cores (rayon), the same
 //!   model and state, for comparison.
 //!
@@ -26,6 +29,7 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::time::{Duration, Instant};
+use sticky_lips::gpu::shaders::ShaderReal;
 use sticky_lips::gpu::sim::Stage;
 use sticky_lips::gpu::{GpuContext, GpuSimulation};
 use sticky_lips::tled::Simulation;
@@ -159,27 +163,46 @@ fn bench_gpu(c: &mut Criterion, p: &Problem, label: &str, seeded: bool) {
         });
         g.finish();
     }
+    let plain = sim.shader_real() == ShaderReal::F32ExactCbrt;
     drop(sim);
-    match GpuContext::new().and_then(|ctx| GpuSimulation::<f64>::with_context(ctx, p)) {
-        Ok(mut sim) => {
-            if seeded {
-                let u0 = common::seed_displacement(p);
-                sim.set_state(&u0, &u0);
-            }
-            sim.step_many(SEED_STEPS).expect("stable");
-            let mut g = c.benchmark_group("step");
-            g.throughput(Throughput::Elements(ne));
-            g.bench_function(BenchmarkId::new("gpu-f64", label), |b| {
-                b.iter_custom(|iters| {
-                    let t = Instant::now();
-                    sim.step_many(iters as usize).expect("stable");
-                    t.elapsed()
-                })
-            });
-            g.finish();
-        }
+    let f64_sim = GpuContext::new().and_then(|ctx| GpuSimulation::<f64>::with_context(ctx, p));
+    match f64_sim {
+        Ok(sim) => bench_gpu_step(c, sim, "gpu-f64", p, label, seeded),
         Err(e) => eprintln!("SKIPPED step/gpu-f64/{label}: {e}"),
     }
+    // on adapters with SHADER_F64 `gpu-f32` refines the cube root in f64 (the CPU's bits);
+    // `gpu-f32only` is what adapters without it run, for the price of that exactness
+    if plain {
+        let ctx = GpuContext::new().expect("the adapter of gpu-f32");
+        let sim = GpuSimulation::<f32>::with_shader_real(ctx, p, ShaderReal::F32).expect("GPU");
+        bench_gpu_step(c, sim, "gpu-f32only", p, label, seeded);
+    }
+}
+
+/// `step/ID/LABEL`: full steps of `sim` from the seeded state.
+fn bench_gpu_step<T: sticky_lips::gpu::GpuReal>(
+    c: &mut Criterion,
+    mut sim: GpuSimulation<T>,
+    id: &str,
+    p: &Problem,
+    label: &str,
+    seeded: bool,
+) {
+    if seeded {
+        let u0 = common::seed_displacement(p);
+        sim.set_state(&u0, &u0);
+    }
+    sim.step_many(SEED_STEPS).expect("stable");
+    let mut g = c.benchmark_group("step");
+    g.throughput(Throughput::Elements(p.mesh.elements.len() as u64));
+    g.bench_function(BenchmarkId::new(id, label), |b| {
+        b.iter_custom(|iters| {
+            let t = Instant::now();
+            sim.step_many(iters as usize).expect("stable");
+            t.elapsed()
+        })
+    });
+    g.finish();
 }
 
 fn benches(c: &mut Criterion) {

@@ -117,10 +117,13 @@ def table(res: dict, cpu_threads: str) -> list[str]:
 
 def scene_figures(d: Path) -> tuple[str, float | None]:
     """`sticky-lips run` summary of the paper's scene: (description, stepping seconds)."""
+    f = d / "summary.json"
+    if not f.exists():
+        return f"{d}: no summary.json (the run did not finish)", None
     try:
-        s = json.loads((d / "summary.json").read_text())
+        s = json.loads(f.read_text())
     except (OSError, ValueError) as e:
-        return f"{d}: no summary.json ({e})", None
+        return f"{f}: unreadable ({e})", None
     steps = s.get("steps")
     step_t, wall_t = s.get("stepping_time"), s.get("wall_time")
     backend = s.get("backend", "?")

@@ -80,8 +80,9 @@ def test_missing_figures_are_not_measured(tmp_path):
     put(tmp_path, "host", "gpu-f32", "hex=mouth", 3420, 3_000.0)
     put(tmp_path, "step", "f64_threads=2", "hex=8000", 8000, 300_000.0)
     scene(tmp_path / "cut", 4_000, 0.1)  # a run stopped by its time limit
-    out = report(tmp_path, "--scene", str(tmp_path / "cut"))
+    out = report(tmp_path, "--scene", str(tmp_path / "cut"), "--scene", str(tmp_path / "absent"))
     assert out.count("not measured") == 3
+    assert "absent: no summary.json (the run did not finish)" in out
     assert "f64_threads" not in out
     assert "4000 steps, not the scene's 100000" in out
 
