@@ -121,11 +121,7 @@ fn bench_gpu(c: &mut Criterion, p: &Problem, label: &str, seeded: bool) {
     };
     eprintln!("gpu benchmarks on {}", ctx.describe());
     let mut sim = GpuSimulation::<f32>::with_context(ctx, p).expect("GPU simulation");
-    if seeded {
-        let u0 = common::seed_displacement(p);
-        sim.set_state(&u0, &u0);
-    }
-    sim.step_many(SEED_STEPS).expect("stable");
+    seed(&mut sim, p, seeded);
     let ne = p.mesh.elements.len() as u64;
     {
         let mut g = c.benchmark_group("host");
@@ -145,56 +141,65 @@ fn bench_gpu(c: &mut Criterion, p: &Problem, label: &str, seeded: bool) {
         g.finish();
     }
     for (name, stage) in [
-        ("element_forces", Some(Stage::ElementForces)),
-        ("node_update", Some(Stage::NodeUpdate)),
-        ("step", None),
+        ("element_forces", Stage::ElementForces),
+        ("node_update", Stage::NodeUpdate),
     ] {
         let mut g = c.benchmark_group(name);
         g.throughput(Throughput::Elements(ne));
         g.bench_function(BenchmarkId::new("gpu-f32", label), |b| {
             b.iter_custom(|iters| {
                 let t = Instant::now();
-                match stage {
-                    Some(s) => sim.bench_stage(s, iters as usize).expect("dispatch"),
-                    None => sim.step_many(iters as usize).expect("stable"),
-                }
+                sim.bench_stage(stage, iters as usize).expect("dispatch");
                 t.elapsed()
             })
         });
         g.finish();
     }
-    let plain = sim.shader_real() == ShaderReal::F32ExactCbrt;
+    bench_gpu_step(c, &mut sim, "gpu-f32", label);
+    let exact_cbrt = sim.shader_real() == ShaderReal::F32ExactCbrt;
     drop(sim);
     let f64_sim = GpuContext::new().and_then(|ctx| GpuSimulation::<f64>::with_context(ctx, p));
     match f64_sim {
-        Ok(sim) => bench_gpu_step(c, sim, "gpu-f64", p, label, seeded),
+        Ok(mut sim) => {
+            seed(&mut sim, p, seeded);
+            bench_gpu_step(c, &mut sim, "gpu-f64", label);
+        }
         Err(e) => eprintln!("SKIPPED step/gpu-f64/{label}: {e}"),
     }
     // on adapters with SHADER_F64 `gpu-f32` refines the cube root in f64 (the CPU's bits);
     // `gpu-f32only` is what adapters without it run, for the price of that exactness
-    if plain {
-        let ctx = GpuContext::new().expect("the adapter of gpu-f32");
-        let sim = GpuSimulation::<f32>::with_shader_real(ctx, p, ShaderReal::F32).expect("GPU");
-        bench_gpu_step(c, sim, "gpu-f32only", p, label, seeded);
+    if exact_cbrt {
+        let f32_sim = GpuContext::new()
+            .and_then(|ctx| GpuSimulation::<f32>::with_shader_real(ctx, p, ShaderReal::F32));
+        match f32_sim {
+            Ok(mut sim) => {
+                seed(&mut sim, p, seeded);
+                bench_gpu_step(c, &mut sim, "gpu-f32only", label);
+            }
+            Err(e) => eprintln!("SKIPPED step/gpu-f32only/{label}: {e}"),
+        }
     }
 }
 
-/// `step/ID/LABEL`: full steps of `sim` from the seeded state.
-fn bench_gpu_step<T: sticky_lips::gpu::GpuReal>(
-    c: &mut Criterion,
-    mut sim: GpuSimulation<T>,
-    id: &str,
-    p: &Problem,
-    label: &str,
-    seeded: bool,
-) {
+/// The state every GPU measurement starts from: the block's deformed field (when `seeded`),
+/// then [`SEED_STEPS`] steps.
+fn seed<T: sticky_lips::gpu::GpuReal>(sim: &mut GpuSimulation<T>, p: &Problem, seeded: bool) {
     if seeded {
         let u0 = common::seed_displacement(p);
         sim.set_state(&u0, &u0);
     }
     sim.step_many(SEED_STEPS).expect("stable");
+}
+
+/// `step/ID/LABEL`: full steps of `sim` (`GpuSimulation::step_many`).
+fn bench_gpu_step<T: sticky_lips::gpu::GpuReal>(
+    c: &mut Criterion,
+    sim: &mut GpuSimulation<T>,
+    id: &str,
+    label: &str,
+) {
     let mut g = c.benchmark_group("step");
-    g.throughput(Throughput::Elements(p.mesh.elements.len() as u64));
+    g.throughput(Throughput::Elements(sim.num_elements() as u64));
     g.bench_function(BenchmarkId::new(id, label), |b| {
         b.iter_custom(|iters| {
             let t = Instant::now();
