@@ -8,15 +8,15 @@
 #   bash scripts/device_gpu_check.sh     # results under $OUT (default ./device-results)
 #
 # It holds stripped builds of the CLI (release), the GPU benchmark (bench profile) and the
-# verification suite (test profile), NiftySim's oracle models, and the Vulkan loader
-# packages (Debian's libvulkan1 and friends, unpacked there only if the machine lacks a loader).
+# verification suite (test profile) and the Vulkan loader packages (Debian's libvulkan1 and
+# friends, unpacked there only if the machine lacks a loader). The NiftySim reference data the
+# suite reads is part of the checkout (verification/reference/niftysim).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$(pwd)
 B="$ROOT/.device"
-SHARED="${STICKY_LIPS_SHARED:-$ROOT/../shared}"
 rm -rf "$B"
-mkdir -p "$B/bin" "$B/shared" "$B/gl"
+mkdir -p "$B/bin" "$B/gl"
 
 exe_of() { # the test or bench executable cargo built, from its JSON messages
   python3 -c '
@@ -42,8 +42,6 @@ strip "$B"/bin/*
 echo "$ROOT" > "$B/manifest_dir"
 git rev-parse HEAD > "$B/commit"
 git diff --quiet HEAD || echo "(with uncommitted changes)" >> "$B/commit"
-
-cp -r "$SHARED/oracle" "$B/shared/oracle"
 
 echo "==> Vulkan loader packages (apt-get download, amd64)"
 mkdir -p /tmp/amd64-lists/partial

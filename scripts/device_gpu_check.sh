@@ -39,7 +39,7 @@ MANIFEST=$(cat "$B/manifest_dir")
 if [ "$MANIFEST" != "$ROOT" ] && [ ! -e "$MANIFEST" ]; then
   mkdir -p "$(dirname "$MANIFEST")" && ln -s "$ROOT" "$MANIFEST"
 fi
-export STICKY_LIPS_SHARED="$B/shared" WGPU_BACKEND="${WGPU_BACKEND:-vulkan}" STICKY_LIPS_REQUIRE_GPU=1
+export WGPU_BACKEND="${WGPU_BACKEND:-vulkan}" STICKY_LIPS_REQUIRE_GPU=1
 export CRITERION_HOME=/tmp/criterion
 rm -rf "$CRITERION_HOME" /tmp/scene-*  # a rerun on a warm machine reports this run only
 

@@ -10,6 +10,21 @@ Regenerate with::
 
     .venv/bin/python scripts/skfem_reference.py
 
+Check that the committed file is what this script computes (the test command
+does this; nothing is written)::
+
+    .venv/bin/python scripts/skfem_reference.py --check
+
+The check compares the structure, strings and integers exactly and every float
+to 1e-13 of the largest magnitude of the same quantity (the same key path with
+the list indices dropped, e.g. all ``homogeneous[].forces``): numpy's SIMD
+kernels and the sparse solver sum in a CPU-dependent order, so a run on another
+machine differs in the last bits (measured: up to 3e-16 of the quantity's
+magnitude between an Intel Xeon and the machine that wrote the committed file),
+while any change to what is computed moves the numbers by far more.  The Newton
+residual is round-off by construction; it is only required to be below 1e-12 N
+in both files.
+
 Everything is deterministic: the only randomness (node perturbations) comes
 from ``numpy.random.default_rng(SEED)``, and the package versions are pinned in
 ``scripts/requirements.txt``.
@@ -36,6 +51,8 @@ checked here with an independent VTK-order implementation, not with skfem.
 
 import json
 import os
+import re
+import sys
 import tempfile
 
 import numpy as np
@@ -450,7 +467,60 @@ def static_case(nodes, elems, strain=0.2, L=0.03):
                    "pull_value": pull_value}}
 
 
+CHECK_RTOL = 1e-13
+ROUNDOFF_KEYS = {"residual_norm": 1e-12}
+
+
+def _leaves(x, path, out):
+    if isinstance(x, dict):
+        for k, v in x.items():
+            _leaves(v, f"{path}/{k}", out)
+    elif isinstance(x, list):
+        for i, v in enumerate(x):
+            _leaves(v, f"{path}[{i}]", out)
+    else:
+        out.append((path, x))
+    return out
+
+
+def compare(committed, fresh):
+    """Problems found comparing two reference dictionaries (empty: equal to
+    round-off); prints the largest difference per quantity."""
+    a = _leaves(committed, "", [])
+    b = _leaves(fresh, "", [])
+    if [p for p, _ in a] != [p for p, _ in b]:
+        only = sorted(set(p for p, _ in a) ^ set(p for p, _ in b))
+        return [f"different structure, e.g. {only[:3]}"]
+    quantity = lambda p: re.sub(r"\[\d+\]", "[]", p)
+    scale, worst, problems = {}, {}, []
+    for p, v in a:
+        if isinstance(v, float):
+            q = quantity(p)
+            scale[q] = max(scale.get(q, 0.0), abs(v))
+    for (p, x), (_, y) in zip(a, b):
+        q = quantity(p)
+        key = q.rsplit("/", 1)[-1]
+        if isinstance(x, float) and isinstance(y, float):
+            if key in ROUNDOFF_KEYS:
+                if max(abs(x), abs(y)) > ROUNDOFF_KEYS[key]:
+                    problems.append(f"{p}: {x!r} / {y!r} above {ROUNDOFF_KEYS[key]}")
+                continue
+            d = abs(x - y) / scale[q] if scale[q] > 0 else abs(x - y)
+            worst[q] = max(worst.get(q, 0.0), d)
+            if d > CHECK_RTOL:
+                problems.append(f"{p}: committed {x!r}, computed {y!r} "
+                                f"({d:.1e} of the quantity's magnitude)")
+        elif x != y:
+            problems.append(f"{p}: committed {x!r}, computed {y!r}")
+    for q, d in sorted(worst.items(), key=lambda kv: -kv[1])[:4]:
+        print(f"  largest difference {d:.1e} of max|.| = {scale[q]:.2e}: {q}")
+    return problems
+
+
 def main():
+    check = sys.argv[1:] == ["--check"]
+    if sys.argv[1:] and not check:
+        sys.exit(f"usage: {sys.argv[0]} [--check]")
     check_material()
     rng = np.random.default_rng(SEED)
     meshes = {"hex1_distorted": make_hex1_distorted(rng),
@@ -483,6 +553,19 @@ def main():
     out["static"] = static_case(*meshes["patch3_distorted"])
 
     path = os.path.normpath(OUT_PATH)
+    if check:
+        with open(path) as f:
+            committed = json.load(f)
+        problems = compare(committed, json.loads(json.dumps(out)))
+        if problems:
+            print(f"{path} is not what scripts/skfem_reference.py computes "
+                  f"({len(problems)} differences beyond round-off):", file=sys.stderr)
+            for line in problems[:20]:
+                print("  " + line, file=sys.stderr)
+            sys.exit(1)
+        print(f"{path}: equal to the computed data to round-off "
+              f"(floats within {CHECK_RTOL} of each quantity's magnitude)")
+        return
     os.makedirs(os.path.dirname(path), exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=os.path.dirname(path), suffix=".tmp")
     with os.fdopen(fd, "w") as f:

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Whole-process timing of NiftySim's timing_block20 model (20^3 = 8000 hexahedra, 1001
 # iterations) with the release binary, next to NiftySim's own figures
-# (../shared/oracle/niftysim/README.md: 0.27 us/element-step single-threaded float32 build,
+# (verification/reference/niftysim/README.md: 0.27 us/element-step single-threaded float32 build,
 # 0.22 us double build, 0.17 us with its 2-thread build).
 #
 #   scripts/time_niftysim_block.sh            # 5 repeats of f64/f32 x 1/2 threads
@@ -24,7 +24,7 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$here"
 
 BIN="${BIN:-target/release/sticky-lips}"
-MODEL="${MODEL:-../shared/oracle/niftysim/timing_block20.xml}"
+MODEL="${MODEL:-verification/reference/niftysim/timing_block20.xml}"
 REPEATS="${REPEATS:-5}"
 THREADS="${THREADS:-1 2}"
 PRECISIONS="${PRECISIONS:-f64 f32}"
@@ -133,7 +133,7 @@ for rep in range(1, repeats + 1):
         print(".", end="", file=sys.stderr, flush=True)
 print(file=sys.stderr)
 
-# NiftySim 2.5 on this machine kind (../shared/oracle/niftysim/README.md), us/element-step:
+# NiftySim 2.5 on this machine kind (verification/reference/niftysim/README.md), us/element-step:
 # 1 thread: stock float32 build 0.27, double build 0.22; 2-thread build (float32) 0.17.
 nifty = {("f32", "1"): (0.27, "f32 build"), ("f64", "1"): (0.22, "double build"),
          ("f32", "2"): (0.17, "2-thread build"), ("f64", "2"): (0.17, "2-thread f32 build")}

@@ -38,7 +38,7 @@ pub struct Numerics {
     /// Hourglass control coefficient `kappa` (dimensionless; Table 1: 0.075).
     pub hourglass_kappa: f64,
     pub variant: GradientVariant,
-    /// NiftySim's timing quirks (see `NOTES.md` section 2): `NumSteps + 1` iterations,
+    /// NiftySim's timing quirks (as its 2.5 source steps): `NumSteps + 1` iterations,
     /// unclamped load shapes, external forces lagging one step.
     pub niftysim_timing: bool,
 }

@@ -8,23 +8,16 @@ pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// `shared/` beside the checkout (or `$STICKY_LIPS_SHARED`): NiftySim's oracle lives there.
-pub fn shared() -> PathBuf {
-    if let Ok(p) = std::env::var("STICKY_LIPS_SHARED") {
-        return PathBuf::from(p);
-    }
-    let beside = repo().join("..").join("shared");
-    if beside.exists() {
-        return beside;
-    }
-    repo().join("shared")
-}
-
+/// NiftySim's reference data, committed with the repository
+/// (`verification/reference/niftysim/README.md`: the models, the two builds, checksums).
 pub fn oracle_dir() -> PathBuf {
-    let d = shared().join("oracle").join("niftysim");
+    let d = repo()
+        .join("verification")
+        .join("reference")
+        .join("niftysim");
     assert!(
-        d.join("README.md").exists(),
-        "NiftySim oracle not found at {} (set STICKY_LIPS_SHARED to the shared/ folder)",
+        d.join("SHA256SUMS").exists(),
+        "NiftySim reference data missing at {} (it is part of the repository: is the checkout complete?)",
         d.display()
     );
     d

@@ -1,5 +1,5 @@
 //! NiftySim as an external oracle: with NiftySim's element variant and timing, our f64 run
-//! reproduces its double-precision build (`../shared/oracle/niftysim/out_f64`).
+//! reproduces its double-precision build (`verification/reference/niftysim/out_f64`).
 
 use crate::common::*;
 use sticky_lips::element::hex8::GradientVariant;

@@ -20,7 +20,7 @@ fn displacement_gradient(ue: ptr<function, array<real, 24>>, d: ptr<function, ar
     return h;
 }
 
-// Paper eq. (4) with Flanagan-Belytschko hourglass control (NOTES 1):
+// Paper eq. (4) with Flanagan-Belytschko hourglass control (src/tled/element_forces.rs):
 // f_a = W F S D_a + k sum_alpha gamma_a,alpha sum_b gamma_b,alpha u_b.
 // `gamma[4 a + alpha]`; w, k, mu, bulk: weight W, hourglass stiffness, moduli.
 fn element_force(

@@ -60,7 +60,7 @@ struct Pk2 {
     j: real,
 }
 
-// NiftySim's neo-Hookean second Piola-Kirchhoff stress from H (NOTES 1):
+// NiftySim's neo-Hookean second Piola-Kirchhoff stress from H (src/material/neo_hookean.rs):
 // S = mu J^(-2/3) (I - tr C / 3 C^-1) + K J (J - 1) C^-1, with I - tr C/3 C^-1 = C^-1 dev(C - I).
 // Twin: neo_hookean::pk2_stress.
 fn pk2_stress(h: mat3r, mu: real, bulk: real) -> Pk2 {

@@ -1,4 +1,4 @@
-//! NiftySim's XML model format (the subset the paper's model used: `NOTES.md` section 2).
+//! NiftySim's XML model format (the subset the paper's model used, as NiftySim 2.5 reads it).
 //!
 //! `<Model>` with `<Nodes DOF="3" NumNodes>`, `<Elements Type="H8" NumEls>`,
 //! `<ElementSet Size>` holding a `<Material Type="NH">` (`<ElasticParams>` "mu K", optional

@@ -10,7 +10,8 @@
 //! $$ u_{n+1} = u_n + A (R_n - F_n) + c_1 (u_n - u_{n-1}), \quad c_1 = \frac{1 - \alpha\,dt/2}{1 + \alpha\,dt/2}, $$
 //!
 //! which keeps a body at rest exactly at rest in `f32` (the rounded `B + C - 1` of the
-//! textbook form acts as a spurious spring: `NOTES.md` section 1).
+//! textbook form acts as a spurious spring; NiftySim's float32 build has that form and
+//! drifts by up to 1e-3 over long runs).
 //!
 //! Verified by `verification/time_integration.rs` (second-order convergence, energy
 //! conservation without damping, stability limit).
