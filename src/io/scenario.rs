@@ -41,10 +41,10 @@ pub struct ScenarioFile {
     pub saliva: Vec<SalivaDef>,
     #[serde(default)]
     pub muscle: Vec<MuscleDef>,
-    /// The jaw opening (mouth generator only): rotation of the `jaw` node set about the
-    /// model's hinge.
+    /// The jaw opening (mouth models only: generators `mouth` and `face`): rotation of the
+    /// model's jaw nodes about its hinge.
     pub jaw: Option<JawDef>,
-    /// Muscles of the mouth model, by name (mouth generator only).
+    /// Muscles of the mouth model, by name (generators `mouth` and `face`).
     #[serde(default)]
     pub model_muscle: Vec<ModelMuscleDef>,
     pub time: TimeDef,
@@ -72,13 +72,18 @@ pub struct MeshSection {
     /// Interior node displacement as a fraction of the cell size (`distorted_block`).
     pub distortion: Option<f64>,
     pub seed: Option<u64>,
-    /// Mesh file, relative to the scenario file (`niftysim`).
+    /// Mesh file, relative to the scenario file (`niftysim`); for `face`, a directory with
+    /// `face.obj` and `face.json` (as `sticky-lips face` writes them; default: the shipped
+    /// MakeHuman face).
     pub file: Option<PathBuf>,
     /// Layers stacked along z, bottom first (`layers`): `{ name, thickness, cells }`.
     pub layers: Option<Vec<generate::Layer>>,
     /// Parameters of the procedural mouth (`mouth`); every field has a default (SI units,
     /// not affected by `[units]`).
     pub mouth: Option<crate::mesh::mouth::MouthParams>,
+    /// Parameters of the face model (`face`): subdivision level, thickness, jaw weight
+    /// threshold, muscles; every field has a default (SI units, not affected by `[units]`).
+    pub face: Option<crate::mesh::face::FaceParams>,
 }
 
 /// `[jaw]`: the angle (rad, positive opens) and its curve.
@@ -422,7 +427,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
     let need = |v: Option<[f64; 3]>, k: &str| {
         v.ok_or_else(|| Error::field(f, format!("mesh.{k}"), "required by this generator"))
     };
-    let mut mouth: Option<crate::mesh::mouth::MouthModel> = None;
+    let mut anatomy: Option<crate::mesh::anatomy::MouthAnatomy> = None;
     let mut mesh: Mesh = match m.generator.as_str() {
         "block" | "distorted_block" => {
             let cells = m
@@ -493,9 +498,20 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
         "mouth" => {
             let params = m.mouth.clone().unwrap_or_default();
             let model = crate::mesh::mouth::generate(&params)?;
-            let mesh = model.mesh.clone();
-            mouth = Some(model);
-            mesh
+            anatomy = Some(model.anatomy());
+            model.mesh
+        }
+        "face" => {
+            use crate::mesh::face;
+            let src = match &m.file {
+                Some(rel) => face::read_dir(&base.join(rel))?,
+                None => face::makehuman()?,
+            };
+            let params = m.face.clone().unwrap_or_default();
+            params.validate(f, "mesh.face.")?;
+            let model = face::build(&src, &params, f)?;
+            anatomy = Some(model.anatomy());
+            model.mesh
         }
         "niftysim" => {
             let rel = m.file.as_ref().ok_or_else(|| {
@@ -515,15 +531,13 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
             }
             mesh
         }
-        o => {
-            return Err(Error::field(
-                f,
-                "mesh.generator",
-                format!(
-                    "unknown generator `{o}` (block, distorted_block, layers, mouth, niftysim)"
-                ),
-            ))
-        }
+        o => return Err(Error::field(
+            f,
+            "mesh.generator",
+            format!(
+                "unknown generator `{o}` (block, distorted_block, layers, mouth, face, niftysim)"
+            ),
+        )),
     };
     mesh.element_sets
         .entry("all".into())
@@ -733,9 +747,13 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
         });
     }
     if let Some(j) = &sf.jaw {
-        let model = mouth
-            .as_ref()
-            .ok_or_else(|| Error::field(f, "jaw", "[jaw] needs the mouth generator"))?;
+        let model = anatomy.as_ref().ok_or_else(|| {
+            Error::field(
+                f,
+                "jaw",
+                "[jaw] needs a mouth model (generator `mouth` or `face`)",
+            )
+        })?;
         bc.rotations
             .push(model.jaw_rotation(j.angle, curve(&j.curve, "jaw", LoadShape::SmoothStep)?));
     }
@@ -748,7 +766,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
     }
 
     let mut physics = read_physics(&sf, f, base, scale, &materials, &curve)?;
-    if let Some(model) = &mouth {
+    if let Some(model) = &anatomy {
         for (i, mm) in sf.model_muscle.iter().enumerate() {
             let field = format!("model_muscle[{i}]");
             let mut m = model
@@ -774,20 +792,16 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
         }
         for s in physics.saliva.iter_mut() {
             if s.params.across.is_none() {
-                s.params.across = Some(model.saliva_across);
+                s.params.across = Some(model.saliva_across.clone());
             }
         }
-        physics.lip_columns = Some(crate::measures::LipColumns {
-            x: model.saliva_columns.iter().map(|c| c.0).collect(),
-            upper: model.saliva_columns.iter().map(|c| c.1).collect(),
-            lower: model.saliva_columns.iter().map(|c| c.2).collect(),
-            center: 0.0,
-        });
+        physics.lip_columns = Some(model.columns.clone());
+        physics.model = Some(model.source.clone());
     } else if !sf.model_muscle.is_empty() {
         return Err(Error::field(
             f,
             "model_muscle",
-            "[[model_muscle]] needs the mouth generator",
+            "[[model_muscle]] needs a mouth model (generator `mouth` or `face`)",
         ));
     }
     let nd = &sf.numerics;
@@ -829,7 +843,9 @@ fn read_physics(
     materials: &[MaterialSpec],
     curve: &CurveFn,
 ) -> Result<Physics> {
-    use crate::material::saliva::{Decay, EvaporationSchedule, MoistureMap, SalivaParams};
+    use crate::material::saliva::{
+        AcrossAxis, Decay, EvaporationSchedule, MoistureMap, SalivaParams,
+    };
     let mut physics = Physics::default();
     let unit_axis = |a: [f64; 3], field: &str| -> Result<[f64; 3]> {
         let n = crate::linalg::norm(&a);
@@ -935,7 +951,7 @@ fn read_physics(
             (d, None) => Decay::PerStep(d.unwrap_or(0.99)),
         };
         let across = match sd.across {
-            Some(a) => Some(unit_axis(a, &field("across"))?),
+            Some(a) => Some(AcrossAxis::Uniform(unit_axis(a, &field("across"))?)),
             None => None,
         };
         physics.saliva.push(SalivaSet {

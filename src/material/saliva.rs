@@ -320,9 +320,20 @@ pub struct SalivaParams {
     pub evaporation: EvaporationSchedule,
     pub rule: BreakingRule,
     pub decay: Decay,
-    /// The local y axis (across the layer) for every element of the set; `None` = found
-    /// from each element's reference geometry ([`across_direction`]).
-    pub across: Option<[f64; 3]>,
+    /// The local y axis (across the layer); `None` = found from each element's reference
+    /// geometry ([`across_direction`]).
+    pub across: Option<AcrossAxis>,
+}
+
+/// The local y axis of the saliva elements (across the layer), in the reference
+/// configuration: the direction whose stretch `Q` eqs. (8)-(10) measure.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AcrossAxis {
+    /// One direction for every element of the set (normalised where used).
+    Uniform([f64; 3]),
+    /// A unit direction per element, by element index (a model that knows its lips, e.g. a
+    /// face whose strip is sheared: [`crate::mesh::face::FaceModel::saliva_across`]).
+    PerElement(std::collections::BTreeMap<u32, [f64; 3]>),
 }
 
 impl SalivaParams {

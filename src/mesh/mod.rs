@@ -1,6 +1,8 @@
 //! Hexahedral meshes: geometry, named sets, topology and validation.
 
+pub mod anatomy;
 pub mod extrude;
+pub mod face;
 pub mod generate;
 pub mod mouth;
 

@@ -499,6 +499,23 @@ impl MouthModel {
     /// The lip gap at each saliva column for current node positions `x` (all nodes): the
     /// distance between the facing skin nodes minus its reference value (m). Zero at rest,
     /// positive where the lips have parted.
+    /// What a scenario needs of the model ([`super::anatomy`]).
+    pub fn anatomy(&self) -> super::anatomy::MouthAnatomy {
+        super::anatomy::MouthAnatomy {
+            source: "procedural mouth".into(),
+            jaw_nodes: self.mesh.node_sets["jaw"].clone(),
+            hinge: self.jaw_hinge,
+            muscles: self.muscles.clone(),
+            columns: crate::measures::LipColumns {
+                x: self.saliva_columns.iter().map(|c| c.0).collect(),
+                upper: self.saliva_columns.iter().map(|c| c.1).collect(),
+                lower: self.saliva_columns.iter().map(|c| c.2).collect(),
+                center: 0.0,
+            },
+            saliva_across: crate::material::saliva::AcrossAxis::Uniform(self.saliva_across),
+        }
+    }
+
     pub fn lip_gaps(&self, x: &[[f64; 3]]) -> Vec<f64> {
         let d = |a: &[f64; 3], b: &[f64; 3]| {
             ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()

@@ -181,11 +181,17 @@ fn plan_saliva(p: &Problem) -> SalivaPlan {
         };
         let params = &p.physics.saliva[g].params;
         let x = p.mesh.element_coords(e);
-        let across = match params.across {
-            Some(a) => {
-                let n = crate::linalg::norm(&a);
-                [a[0] / n, a[1] / n, a[2] / n]
-            }
+        let unit = |a: [f64; 3]| {
+            let n = crate::linalg::norm(&a);
+            [a[0] / n, a[1] / n, a[2] / n]
+        };
+        let across = match &params.across {
+            Some(saliva::AcrossAxis::Uniform(a)) => unit(*a),
+            // Problem::validate checks that every saliva element has its axis
+            Some(saliva::AcrossAxis::PerElement(m)) => match m.get(&(e as u32)) {
+                Some(a) => unit(*a),
+                None => saliva::across_direction(&x),
+            },
             None => saliva::across_direction(&x),
         };
         let mut c = [0.0; 3];

