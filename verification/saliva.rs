@@ -534,6 +534,7 @@ fn one_element_problem(params: SalivaParams) -> Problem {
             }],
             muscles: vec![],
             lip_columns: None,
+            model: None,
         },
     }
 }
@@ -961,6 +962,7 @@ fn slabs(
             }],
             muscles: vec![],
             lip_columns: None,
+            model: None,
         },
     };
     Slabs {
