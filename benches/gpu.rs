@@ -19,7 +19,7 @@
 //!
 //! The block model is the one of `benches/tled.rs` (NiftySim's `timing_block20` scaled to
 //! `N = n^3` hexahedra, base fixed, top driven down by a clamped RAMP), seeded with the same
-//! deformed state. The mouth is `paper/scenarios/fig4_sticky.toml` at full resolution (its
+//! deformed state. The mouth is the procedural mouth's `fig4_sticky` run (`sticky_lips::paper`, Table 1 on the procedural mouth) at full resolution (its
 //! 3414-hexahedra-class mesh, saliva included).
 //!
 //! Throughput is `Elements(N)`: "elem/s" is element-updates per second.

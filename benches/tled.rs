@@ -22,7 +22,7 @@
 //! Sizes: `STICKY_LIPS_BENCH_SIZES=1000,8000` (default `1000,8000,64000`; any cube
 //! `n^3` is accepted, e.g. `512000` = 80^3; a `k` suffix means thousands, `64k`).
 //! Thread counts: `STICKY_LIPS_BENCH_THREADS=1,2` (default `1,2`).
-//! `step/PRECISION/threads=K/mouth=N` is the paper's scene (`paper/scenarios/fig4_sticky.toml`:
+//! `step/PRECISION/threads=K/mouth=N` is the paper's scene (the procedural mouth's `fig4_sticky` run (`sticky_lips::paper`, Table 1 on the procedural mouth):
 //! the mouth at paper resolution with its saliva layer, breaking rule and jaw);
 //! `STICKY_LIPS_BENCH_MOUTH=0` leaves it out.
 //! `STICKY_LIPS_BENCH_STABILITY=1` prints each block's critical time step (Lanczos) first.
@@ -238,7 +238,7 @@ fn bench_precision<T: Real>(c: &mut Criterion, p: &Problem, pools: &[(usize, Thr
     }
 }
 
-/// The paper's scene: `paper/scenarios/fig4_sticky.toml` (the mouth at paper resolution,
+/// The paper's scene: the procedural mouth's `fig4_sticky` run (`sticky_lips::paper`, Table 1 on the procedural mouth) (the mouth at paper resolution,
 /// saliva with the breaking rule, jaw rotation; Table 1's dt), advanced `MOUTH_SEED_STEPS`
 /// from rest first so that the jaw has started to turn and every element is deformed.
 fn bench_mouth<T: Real>(c: &mut Criterion, pools: &[(usize, ThreadPool)]) {

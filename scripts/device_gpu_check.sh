@@ -5,7 +5,7 @@
 #   bash scripts/device_gpu_check.sh     # results in $OUT (default ./device-results)
 #
 # 1. the GPU verification suite (`verification/gpu.rs`) with STICKY_LIPS_REQUIRE_GPU=1;
-# 2. the paper's scene (paper/scenarios/fig4_sticky.toml: 3420 hexahedra, 100 000 steps, 1 s
+# 2. the paper's scene (paper/scenarios/table1.toml, the MakeHuman face: 3392 hexahedra, 100 000 steps, 1 s
 #    simulated) through the CLI: GPU f32, GPU f64 (if the adapter has SHADER_F64) and the CPU
 #    on 2 threads; wall and stepping times from each summary.json (target: GPU <= 1 s);
 # 3. `benches/gpu.rs` (criterion) on blocks of 1k, 8k, 64k and 512k hexahedra and the mouth,
@@ -64,9 +64,9 @@ part "the paper's scene through the CLI"
   for cfg in "gpu f32" "gpu f64" "cpu f64"; do
     set -- $cfg
     out="/tmp/scene-$1-$2"
-    echo "--- sticky-lips run paper/scenarios/fig4_sticky.toml --backend $1 --precision $2 --threads 2"
+    echo "--- sticky-lips run paper/scenarios/table1.toml --backend $1 --precision $2 --threads 2"
     start=$EPOCHREALTIME
-    timeout "${SCENE_TIMEOUT:-120}" "$B/bin/sticky-lips" run paper/scenarios/fig4_sticky.toml --out "$out" \
+    timeout "${SCENE_TIMEOUT:-120}" "$B/bin/sticky-lips" run paper/scenarios/table1.toml --out "$out" \
       --backend "$1" --precision "$2" --threads 2 --quiet 2>&1 | grep -av XDG_RUNTIME_DIR
     echo "process wall $(python3 -c "print(round($EPOCHREALTIME - $start, 3))") s"
     python3 - "$out/summary.json" <<'EOF'

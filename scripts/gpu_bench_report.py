@@ -12,7 +12,7 @@ Then the three real-GPU targets of issue 6, each with the figures it was judged 
 
 1. the paper's scene in real time: 100 000 steps of the mouth (`hex=mouth`) in at most 1 s,
    i.e. `step/gpu-f32/hex=mouth` <= 10 us; with `--scene DIR` (a `sticky-lips run` output of
-   paper/scenarios/fig4_sticky.toml) also the run's own `stepping_time` and `wall_time`;
+   paper/scenarios/table1.toml) also the run's own `stepping_time` and `wall_time`;
 2. at least 1e9 element-updates per second on 512k hexahedra (`step/gpu-f32/hex=512000`);
 3. at least 20x the CPU path (`step/cpu-*`, which the bench runs on RAYON_NUM_THREADS threads;
    `--cpu-threads` only labels them) at each size, same precision.
@@ -30,7 +30,7 @@ import os
 import sys
 from pathlib import Path
 
-SCENE_STEPS = 100_000  # paper/scenarios/fig4_sticky.toml: 1 s at dt = 1e-5 s (Table 1)
+SCENE_STEPS = 100_000  # paper/scenarios/table1.toml: 1 s at dt = 1e-5 s (Table 1)
 SCENE_WALL_S = 1.0
 UPDATES_512K = 1e9
 RATIO = 20.0

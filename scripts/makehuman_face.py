@@ -70,10 +70,13 @@ def sha256(data):
 
 
 def fetch_wheel(dest):
-    """Downloads the wheel with pip into ``dest``; returns its path."""
+    """Downloads the wheel with pip into ``dest``; returns its path. Exits with code 3
+    (the test command's "registry not reachable") if pip cannot get it."""
     cmd = [sys.executable, "-m", "pip", "download", "--no-deps", "--quiet",
            "--disable-pip-version-check", f"{PACKAGE}=={VERSION}", "-d", dest]
-    subprocess.run(cmd, check=True)
+    if subprocess.run(cmd).returncode != 0:
+        print(f"pip could not download {PACKAGE}=={VERSION} (is PyPI reachable?)", file=sys.stderr)
+        sys.exit(3)
     return os.path.join(dest, WHEEL)
 
 

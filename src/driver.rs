@@ -69,18 +69,18 @@ pub struct RunOptions {
     pub progress: Progress,
 }
 
-#[derive(Clone, Debug, Default, serde::Serialize)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct EnergySeries {
     pub time: Vec<f64>,
     pub kinetic: Vec<f64>,
     pub strain: Vec<f64>,
 }
 
-/// `summary.json`.
-#[derive(Clone, Debug, serde::Serialize)]
+/// `summary.json`: what a run did (read back by `paper --reuse`).
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct RunSummary {
     pub input: String,
-    pub kind: &'static str,
+    pub kind: String,
     pub steps: usize,
     pub simulated_time: f64,
     pub dt: f64,
@@ -88,7 +88,7 @@ pub struct RunSummary {
     /// Wall time of the stepping loop alone (s), without output and precompute.
     pub stepping_time: f64,
     pub element_updates_per_second: f64,
-    pub precision: &'static str,
+    pub precision: String,
     /// `cpu`, or `gpu: <adapter>`.
     pub backend: String,
     pub threads: usize,
@@ -326,7 +326,7 @@ fn run_with<S: Stepper>(
     }
     let summary = RunSummary {
         input: problem.source.clone(),
-        kind: "dynamic",
+        kind: "dynamic".into(),
         steps: sim.step_index(),
         simulated_time: sim.time(),
         dt: problem.time.dt,
@@ -334,7 +334,7 @@ fn run_with<S: Stepper>(
         stepping_time: stepping,
         element_updates_per_second: (sim.step_index() * sim.num_elements()) as f64
             / stepping.max(1e-12),
-        precision: sim.precision_name(),
+        precision: sim.precision_name().into(),
         backend: sim.backend_name(),
         threads: rayon::current_num_threads(),
         num_nodes: problem.mesh.nodes.len(),
@@ -406,14 +406,14 @@ pub fn equilibrium(
         let report = analyse(problem, &disc);
         let summary = RunSummary {
             input: problem.source.clone(),
-            kind: "static",
+            kind: "static".into(),
             steps: res.newton_iterations,
             simulated_time: problem.time.total_time,
             dt: problem.time.dt,
             wall_time: t0.elapsed().as_secs_f64(),
             stepping_time: 0.0,
             element_updates_per_second: 0.0,
-            precision: "f64",
+            precision: "f64".into(),
             backend: "cpu".into(),
             threads: rayon::current_num_threads(),
             num_nodes: problem.mesh.nodes.len(),

@@ -14,6 +14,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod blend;
+pub mod claims;
 pub mod driver;
 pub mod element;
 pub mod error;
@@ -25,6 +26,7 @@ pub mod material;
 pub mod measures;
 pub mod mesh;
 pub mod muscle;
+pub mod paper;
 pub mod problem;
 pub mod real;
 pub mod render;

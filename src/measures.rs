@@ -97,7 +97,7 @@ pub fn asymmetry(cols: &LipColumns, gap: &[f64]) -> f64 {
 }
 
 /// The measures of one frame.
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct FrameMeasures {
     pub time: f64,
     pub gap: Vec<f64>,
@@ -106,8 +106,8 @@ pub struct FrameMeasures {
     pub asymmetry: f64,
 }
 
-/// The measures of a whole run.
-#[derive(Clone, Debug, serde::Serialize)]
+/// The measures of a whole run (`measures.json`).
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct RunMeasures {
     pub columns: LipColumns,
     /// Gap above which a column counts as open (m).
@@ -183,6 +183,159 @@ impl RunMeasures {
     }
 }
 
+/// Gap growth at which a lip column counts as open for the zip front (m): 0.2 mm, a third
+/// of the saliva row's height at the mouth's centre, far below a visible opening.
+pub const ZIP_THRESHOLD: f64 = 2.0e-4;
+/// Columns farther from the centre than this fraction of the half-width are the corners,
+/// not counted by the zip front (the lips are joined there).
+pub const CORNER_FRACTION: f64 = 0.9;
+
+/// How the lips part along the mouth: the time each lip column opens (its gap first exceeds
+/// the threshold, linear between output frames), with positions as `|x - centre| / w`
+/// (`w` half the mouth width between the first and last column).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ZipFront {
+    /// Gap growth that counts as open (m).
+    pub threshold: f64,
+    /// `|x - centre| / w` of every column.
+    pub position: Vec<f64>,
+    /// Opening time of every column (s); `None`: it never opens.
+    pub opening_time: Vec<Option<f64>>,
+    /// Columns counted (`position <= CORNER_FRACTION`).
+    pub counted: Vec<bool>,
+    /// Time and position of the first counted column to open.
+    pub first: Option<(f64, f64)>,
+    /// When 10 % and 90 % of the counted columns are open.
+    pub t10: Option<f64>,
+    pub t90: Option<f64>,
+    /// Spearman rank correlation of opening time with position, over the counted columns
+    /// that open (at least three): 1 when the lips open strictly from the centre outwards.
+    pub spearman: Option<f64>,
+    /// Counted columns open at the last frame.
+    pub final_open: Vec<bool>,
+    /// Fraction of the counted columns open at the last frame.
+    pub final_open_fraction: f64,
+}
+
+impl ZipFront {
+    pub fn new(m: &RunMeasures, threshold: f64) -> ZipFront {
+        let cols = &m.columns;
+        let n = cols.x.len();
+        let (lo, hi) = (
+            cols.x.iter().copied().fold(f64::INFINITY, f64::min),
+            cols.x.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        );
+        let w = (0.5 * (hi - lo)).max(f64::MIN_POSITIVE);
+        let position: Vec<f64> = cols.x.iter().map(|x| (x - cols.center).abs() / w).collect();
+        let counted: Vec<bool> = position
+            .iter()
+            .map(|p| *p <= CORNER_FRACTION + 1e-12)
+            .collect();
+        let opening_time: Vec<Option<f64>> = (0..n)
+            .map(|c| {
+                let mut prev: Option<(f64, f64)> = None;
+                for f in &m.frames {
+                    let g = f.gap[c];
+                    if g > threshold {
+                        return Some(match prev {
+                            Some((t0, g0)) if g > g0 => {
+                                t0 + (threshold - g0) / (g - g0) * (f.time - t0)
+                            }
+                            _ => f.time,
+                        });
+                    }
+                    prev = Some((f.time, g));
+                }
+                None
+            })
+            .collect();
+        let mut open_times: Vec<f64> = (0..n)
+            .filter(|&c| counted[c])
+            .filter_map(|c| opening_time[c])
+            .collect();
+        open_times.sort_by(f64::total_cmp);
+        let nc = counted.iter().filter(|c| **c).count();
+        let quantile = |q: f64| -> Option<f64> {
+            let k = ((q * nc as f64).ceil() as usize).max(1) - 1;
+            open_times.get(k).copied()
+        };
+        let first = (0..n)
+            .filter(|&c| counted[c])
+            .filter_map(|c| opening_time[c].map(|t| (t, position[c])))
+            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+        let pairs: Vec<(f64, f64)> = (0..n)
+            .filter(|&c| counted[c])
+            .filter_map(|c| opening_time[c].map(|t| (position[c], t)))
+            .collect();
+        let spearman = (pairs.len() >= 3).then(|| {
+            let (a, b): (Vec<f64>, Vec<f64>) = pairs.iter().copied().unzip();
+            spearman(&a, &b)
+        });
+        let last = m.frames.last();
+        let final_open: Vec<bool> = (0..n)
+            .map(|c| last.is_some_and(|f| f.gap[c] > threshold))
+            .collect();
+        let final_open_fraction =
+            (0..n).filter(|&c| counted[c] && final_open[c]).count() as f64 / nc.max(1) as f64;
+        ZipFront {
+            threshold,
+            position,
+            opening_time,
+            counted,
+            first,
+            t10: quantile(0.1),
+            t90: quantile(0.9),
+            spearman,
+            final_open,
+            final_open_fraction,
+        }
+    }
+
+    /// `t90 - t10` (s), when both exist.
+    pub fn spread(&self) -> Option<f64> {
+        Some(self.t90? - self.t10?)
+    }
+}
+
+/// Ranks (1-based, ties averaged).
+fn ranks(v: &[f64]) -> Vec<f64> {
+    let mut idx: Vec<usize> = (0..v.len()).collect();
+    idx.sort_by(|&a, &b| v[a].total_cmp(&v[b]));
+    let mut r = vec![0.0; v.len()];
+    let mut i = 0;
+    while i < idx.len() {
+        let mut j = i;
+        while j + 1 < idx.len() && v[idx[j + 1]] == v[idx[i]] {
+            j += 1;
+        }
+        let avg = 0.5 * (i + j) as f64 + 1.0;
+        for &k in &idx[i..=j] {
+            r[k] = avg;
+        }
+        i = j + 1;
+    }
+    r
+}
+
+/// Spearman's rank correlation of `a` and `b` (Pearson's on their ranks, ties averaged);
+/// 0 when either is constant.
+pub fn spearman(a: &[f64], b: &[f64]) -> f64 {
+    let (ra, rb) = (ranks(a), ranks(b));
+    let n = ra.len() as f64;
+    let (ma, mb) = (ra.iter().sum::<f64>() / n, rb.iter().sum::<f64>() / n);
+    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
+    for (x, y) in ra.iter().zip(&rb) {
+        sab += (x - ma) * (y - mb);
+        saa += (x - ma) * (x - ma);
+        sbb += (y - mb) * (y - mb);
+    }
+    if saa == 0.0 || sbb == 0.0 {
+        0.0
+    } else {
+        sab / (saa * sbb).sqrt()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -236,5 +389,56 @@ mod tests {
         u[9][1] = -0.004;
         let g = lip_gap(&r, &u, &cols());
         assert!(asymmetry(&cols(), &g) > 1.0);
+    }
+
+    #[test]
+    fn spearman_of_monotone_and_reversed_and_tied_data() {
+        assert!((spearman(&[1.0, 2.0, 3.0, 4.0], &[10.0, 20.0, 25.0, 100.0]) - 1.0).abs() < 1e-15);
+        assert!((spearman(&[1.0, 2.0, 3.0], &[3.0, 2.0, 1.0]) + 1.0).abs() < 1e-15);
+        // ties averaged: ranks of b are 1.5, 1.5, 3 -> 0.866...
+        let r = spearman(&[1.0, 2.0, 3.0], &[5.0, 5.0, 7.0]);
+        assert!((r - 0.75f64.sqrt()).abs() < 1e-12, "{r}");
+        assert_eq!(spearman(&[1.0, 2.0], &[4.0, 4.0]), 0.0);
+    }
+
+    #[test]
+    fn zip_front_from_a_centre_first_opening() {
+        // nine columns across [-0.02, 0.02]; column c opens at t = 0.1 + 0.01 |c - 4|, the
+        // gap growing linearly by 1 mm per 0.01 s after that; the corners (|x| = w) are not counted
+        let x: Vec<f64> = (0..9).map(|c| 0.005 * (c as f64 - 4.0)).collect();
+        let cols = LipColumns {
+            x: x.clone(),
+            upper: (0..9).collect(),
+            lower: (9..18).collect(),
+            center: 0.0,
+        };
+        let mut m = RunMeasures::new(cols, 1e-3);
+        for f in 0..30 {
+            let t = 0.01 * f as f64;
+            let gap: Vec<f64> = (0..9)
+                .map(|c| {
+                    let t0 = 0.1 + 0.01 * (c as f64 - 4.0).abs();
+                    (0.1 * (t - t0)).max(0.0)
+                })
+                .collect();
+            m.frames.push(FrameMeasures {
+                time: t,
+                gap,
+                open_fraction: 0.0,
+                broken: 0,
+                asymmetry: 0.0,
+            });
+        }
+        let z = ZipFront::new(&m, 2e-4);
+        assert_eq!(z.counted.iter().filter(|c| **c).count(), 7);
+        // the centre crosses 0.2 mm 2 ms after it starts moving
+        assert!((z.opening_time[4].unwrap() - 0.102).abs() < 1e-12);
+        assert_eq!(z.first.map(|f| f.1), Some(0.0));
+        assert!((z.spearman.unwrap() - 1.0).abs() < 1e-12);
+        // 7 counted columns: 10 % -> the 1st to open, 90 % -> the 7th
+        assert!((z.t10.unwrap() - 0.102).abs() < 1e-12);
+        assert!((z.t90.unwrap() - 0.132).abs() < 1e-12);
+        assert!((z.spread().unwrap() - 0.03).abs() < 1e-12);
+        assert_eq!(z.final_open_fraction, 1.0);
     }
 }

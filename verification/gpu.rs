@@ -583,14 +583,18 @@ fn gpu_breaking_events_match_cpu_on_the_coarse_mouth() {
     let Some(ctx) = adapter("gpu_breaking_events_match_cpu_on_the_coarse_mouth") else {
         return;
     };
-    let o = vec![
-        ("mesh.mouth.resolution", toml::Value::Float(0.25)),
-        // every saliva element of this mesh breaks between 0.354 s and 0.373 s (CPU f32)
-        ("time.total", toml::Value::Float(0.38)),
-    ];
-    let s = scenario::read_with_overrides(&repo().join("paper/scenarios/fig4_sticky.toml"), &o)
-        .unwrap();
-    let p = s.problem;
+    // the procedural mouth's wide opening with stickiness at --quick resolution (0.25)
+    use sticky_lips::paper::{scenario_of, spec, Model};
+    let run = spec(Model::Procedural, true, "fig4_sticky").unwrap();
+    let (_, mut p) = scenario_of(
+        Model::Procedural,
+        true,
+        &run,
+        std::path::Path::new("fig4_sticky"),
+    )
+    .unwrap();
+    // every saliva element of this mesh breaks between 0.354 s and 0.373 s (CPU f32)
+    p.time.total_time = 0.38;
     let mut cpu = Simulation::<f32>::new(&p).unwrap();
     let exact = kernels_bit_exact(&ctx);
     let mut gpu = GpuSimulation::<f32>::with_context(ctx, &p).unwrap();

@@ -433,6 +433,61 @@ fn across_direction_finds_the_thin_direction() {
     assert!(worst < 4.0 * f64::EPSILON, "{worst:e}");
 }
 
+#[test]
+fn sheared_strip_stretch_is_measured_across_the_slab() {
+    // A saliva element of the face's strip: its rung (lower to upper lip) runs up by dy and
+    // forward by dz (the upper lip in front), it is extruded straight back by T. Pulling the
+    // upper face straight up by delta thickens the slab from dy to dy + delta: F = I +
+    // (delta / dy) e_y e_y, so the stretch across the layer (the slab's normal, e_y) is
+    // Q = (1 + delta / dy)^2 exactly. The element's thinnest axis is the rung instead, and
+    // Q measured along it is far smaller: the face gives each saliva element its own axis.
+    use sticky_lips::element::hex8::{gradients, GradientVariant};
+    let (l, dy, dz, t) = (2e-3, 0.7e-3, 1.3e-3, 10e-3);
+    // corners: along x (0/l), across (lower/upper lip), back (0/-t); VTK order
+    let p =
+        |i: usize, j: usize, k: usize| [i as f64 * l, j as f64 * dy, j as f64 * dz - k as f64 * t];
+    let x: [[f64; 3]; 8] = [
+        p(0, 0, 0),
+        p(1, 0, 0),
+        p(1, 1, 0),
+        p(0, 1, 0),
+        p(0, 0, 1),
+        p(1, 0, 1),
+        p(1, 1, 1),
+        p(0, 1, 1),
+    ];
+    let delta = 0.05e-3;
+    let u: [[f64; 3]; 8] =
+        std::array::from_fn(|a| [0.0, if x[a][1] > 0.0 { delta } else { 0.0 }, 0.0]);
+    let (d, _) = gradients(&x, GradientVariant::MeanGradient);
+    let mut h = [[0.0; 3]; 3];
+    for a in 0..8 {
+        for i in 0..3 {
+            for j in 0..3 {
+                h[i][j] += u[a][i] * d[a][j];
+            }
+        }
+    }
+    let expected = (1.0 + delta / dy).powi(2);
+    let q_slab = q_in::<f64>(&h, &[0.0, 1.0, 0.0]);
+    let rung = across_direction(&x);
+    let q_rung = q_in::<f64>(&h, &rung);
+    println!(
+        "sheared strip: Q across the slab {q_slab:.12} (exact {expected:.12}); along the rung {:?}: {q_rung:.6}",
+        rung.map(|v| (v * 1e3).round() / 1e3)
+    );
+    // the homogeneous deformation is represented exactly by the trilinear element: round-off
+    assert!((q_slab - expected).abs() < 1e-12, "{q_slab} vs {expected}");
+    assert!(
+        rung[2].abs() > 0.85,
+        "the thinnest axis is the rung (mostly forward): {rung:?}"
+    );
+    assert!(
+        q_rung - 1.0 < 0.5 * (expected - 1.0),
+        "along the rung most of the stretch is hidden: {q_rung}"
+    );
+}
+
 // ---------------------------------------------------------------------------------------
 // Eq. (11) on one saliva element, through the solver
 // ---------------------------------------------------------------------------------------

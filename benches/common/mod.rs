@@ -82,17 +82,22 @@ pub fn block_problem(c: usize, total_time: f64) -> Problem {
     p
 }
 
-/// The paper's scene, `paper/scenarios/fig4_sticky.toml` (the mouth at paper resolution with
-/// its saliva layer, breaking rule and jaw), simulated for `total_time`.
+/// The procedural mouth's paper scene (Table 1, `paper/scenarios/table1.toml`, on the
+/// procedural mouth at full resolution with its saliva layer, breaking rule and jaw: the run
+/// `fig4_sticky` of `sticky_lips::paper` for `Model::Procedural`), simulated for
+/// `total_time`. The benchmarks keep the procedural mouth: its resolution scales freely.
 pub fn mouth_problem(total_time: f64) -> Problem {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("paper/scenarios/fig4_sticky.toml");
-    sticky_lips::io::scenario::read_with_overrides(
-        &path,
-        &[("time.total", toml::Value::Float(total_time))],
+    use sticky_lips::paper::{scenario_of, spec, Model};
+    let s = spec(Model::Procedural, false, "fig4_sticky").expect("paper run");
+    let (_, mut p) = scenario_of(
+        Model::Procedural,
+        false,
+        &s,
+        std::path::Path::new("fig4_sticky"),
     )
-    .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-    .problem
+    .unwrap_or_else(|e| panic!("the paper's procedural scene: {e}"));
+    p.time.total_time = total_time;
+    p
 }
 
 /// A deformed state of the block that satisfies its constraints at t = 0: zero on the base

@@ -347,9 +347,16 @@ pub fn read_with_overrides(path: &Path, overrides: &[(&str, toml::Value)]) -> Re
     if overrides.is_empty() {
         return parse(&text, path);
     }
-    let file = path.display().to_string();
-    let doc: toml::Table = toml::from_str(&text)
-        .map_err(|e| Error::input(&file, line_of(&text, e.span()), e.message()))?;
+    let text = with_overrides(&text, &path.display().to_string(), overrides)?;
+    parse(&text, path)
+}
+
+/// The scenario text `text` (named `file` in errors) with some values replaced: each
+/// override is a dotted key path (`"mesh.face.resolution"`, `"saliva.0.k_glue"`) and its
+/// new value; missing tables are created. Returns the new TOML text (comments are lost).
+pub fn with_overrides(text: &str, file: &str, overrides: &[(&str, toml::Value)]) -> Result<String> {
+    let doc: toml::Table = toml::from_str(text)
+        .map_err(|e| Error::input(file, line_of(text, e.span()), e.message()))?;
     let mut doc = toml::Value::Table(doc);
     for (key, value) in overrides {
         let parts: Vec<&str> = key.split('.').collect();
@@ -367,11 +374,11 @@ pub fn read_with_overrides(path: &Path, overrides: &[(&str, toml::Value)]) -> Re
                 }
                 toml::Value::Array(a) => {
                     let k: usize = p.parse().map_err(|_| {
-                        Error::field(&file, key.to_string(), "expected an array index")
+                        Error::field(file, key.to_string(), "expected an array index")
                     })?;
                     let n = a.len();
                     let slot = a.get_mut(k).ok_or_else(|| {
-                        Error::field(&file, key.to_string(), format!("index {k} out of {n}"))
+                        Error::field(file, key.to_string(), format!("index {k} out of {n}"))
                     })?;
                     if last {
                         *slot = value.clone();
@@ -381,7 +388,7 @@ pub fn read_with_overrides(path: &Path, overrides: &[(&str, toml::Value)]) -> Re
                 }
                 _ => {
                     return Err(Error::field(
-                        &file,
+                        file,
                         key.to_string(),
                         "override path crosses a plain value",
                     ))
@@ -389,8 +396,7 @@ pub fn read_with_overrides(path: &Path, overrides: &[(&str, toml::Value)]) -> Re
             };
         }
     }
-    let text = toml::to_string(&doc).expect("a TOML table serialises");
-    parse(&text, path)
+    Ok(toml::to_string(&doc).expect("a TOML table serialises"))
 }
 
 fn line_of(text: &str, span: Option<std::ops::Range<usize>>) -> Location {
@@ -531,13 +537,15 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
             }
             mesh
         }
-        o => return Err(Error::field(
-            f,
-            "mesh.generator",
-            format!(
+        o => {
+            return Err(Error::field(
+                f,
+                "mesh.generator",
+                format!(
                 "unknown generator `{o}` (block, distorted_block, layers, mouth, face, niftysim)"
             ),
-        )),
+            ))
+        }
     };
     mesh.element_sets
         .entry("all".into())

@@ -389,6 +389,12 @@ pub fn extrude_with(
         ));
     }
 
+    let uv = surface.uv.as_ref().map(|uv| {
+        let top: Vec<[f64; 2]> = used.iter().map(|&i| uv[i as usize]).collect();
+        let mut all = top.clone();
+        all.extend(top);
+        all
+    });
     let mut mesh = Mesh {
         nodes,
         elements,
@@ -397,6 +403,7 @@ pub fn extrude_with(
         } else {
             Some(surface.quad_lines.clone())
         },
+        uv,
         ..Default::default()
     };
     let mut sets: Vec<Vec<u32>> = vec![Vec::new(); ng];

@@ -23,6 +23,9 @@ pub struct Mesh {
     pub element_sets: BTreeMap<String, Vec<u32>>,
     /// Source line of each element, where the mesh came from a text file (for errors).
     pub element_lines: Option<Vec<usize>>,
+    /// Texture coordinates of each node, where the mesh was extruded from a surface that has
+    /// them (both layers take their surface vertex's); for renderings.
+    pub uv: Option<Vec<[f64; 2]>>,
 }
 
 /// Mesh statistics printed by `sticky-lips check`.

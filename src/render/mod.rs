@@ -375,6 +375,44 @@ pub fn decode_png(bytes: &[u8]) -> std::result::Result<Image, String> {
     })
 }
 
+/// Decodes a baseline or progressive JPEG (greyscale, RGB or CMYK) to RGB, with the
+/// `jpeg-decoder` crate (the MakeHuman textures are JPEG).
+pub fn decode_jpeg(bytes: &[u8]) -> std::result::Result<Image, String> {
+    let mut dec = jpeg_decoder::Decoder::new(std::io::Cursor::new(bytes));
+    let pixels = dec.decode().map_err(|e| e.to_string())?;
+    let info = dec
+        .info()
+        .ok_or_else(|| "JPEG without a frame header".to_string())?;
+    let (w, h) = (info.width as u32, info.height as u32);
+    let n = w as usize * h as usize;
+    let rgb: Vec<u8> = match info.pixel_format {
+        jpeg_decoder::PixelFormat::L8 => pixels.iter().flat_map(|&g| [g, g, g]).collect(),
+        jpeg_decoder::PixelFormat::L16 => pixels
+            .chunks_exact(2)
+            .flat_map(|c| [c[0], c[0], c[0]])
+            .collect(),
+        jpeg_decoder::PixelFormat::RGB24 => pixels,
+        jpeg_decoder::PixelFormat::CMYK32 => pixels
+            .chunks_exact(4)
+            .flat_map(|c| {
+                let k = 255 - c[3] as u32;
+                [c[0], c[1], c[2]].map(|v| ((255 - v as u32) * k / 255) as u8)
+            })
+            .collect(),
+    };
+    if rgb.len() != 3 * n {
+        return Err(format!(
+            "JPEG decoded to {} bytes for {w} x {h} pixels",
+            rgb.len()
+        ));
+    }
+    Ok(Image {
+        width: w,
+        height: h,
+        rgb,
+    })
+}
+
 /// Reads a PNG file (e.g. a texture) as RGB.
 pub fn load_png(path: &Path) -> Result<Image> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;

@@ -631,3 +631,20 @@ fn demo_images() {
     let grid = Image::grid(&plots, 2, 10, BG);
     save_png(std::path::Path::new("/tmp/plot_demo.png"), &grid).unwrap();
 }
+
+#[test]
+fn the_makehuman_masks_decode_as_jpeg() {
+    let img = super::decode_jpeg(crate::mesh::face::MAKEHUMAN_LIPS_TEXTURE).unwrap();
+    assert_eq!((img.width, img.height), (2048, 2048));
+    // a greyscale mask: mostly black, white where the lips are
+    let white = img.rgb.chunks_exact(3).filter(|p| p[0] > 200).count();
+    assert!(
+        white > 100 && white < img.rgb.len() / 30,
+        "{white} white pixels"
+    );
+    assert!(img
+        .rgb
+        .chunks_exact(3)
+        .all(|p| p[0] == p[1] && p[1] == p[2]));
+    assert!(super::decode_jpeg(b"not a jpeg").is_err());
+}

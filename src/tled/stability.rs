@@ -16,7 +16,7 @@ use crate::problem::Problem;
 use crate::tled::precompute::Discretisation;
 use rayon::prelude::*;
 
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct StabilityReport {
     /// `2 / omega_max` (s).
     pub critical_time_step: f64,

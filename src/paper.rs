@@ -1,0 +1,257 @@
+//! The paper's runs as data (no figures here: `sticky-lips paper` makes them): Table 1 once
+//! (`paper/scenarios/table1.toml`, compiled in), the two models it can run on, the
+//! parameters chosen for each, and every run as a short list of overrides on Table 1. The
+//! `paper` command and `verification/paper_claims.rs` both build their runs from this.
+
+use crate::error::Result;
+use crate::io::scenario;
+use crate::Problem;
+use toml::Value;
+
+/// Table 1 and the face model at the wide opening with stickiness.
+pub const TABLE1: &str = include_str!("../paper/scenarios/table1.toml");
+/// Where [`TABLE1`] comes from.
+pub const TABLE1_NAME: &str = "paper/scenarios/table1.toml";
+
+/// Which model the figures are made on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Model {
+    /// The MakeHuman head (`assets/makehuman/`).
+    Face,
+    /// The procedural mouth (`src/mesh/mouth.rs`), with its own choice of K_glue and angles.
+    Procedural,
+}
+
+/// The parameters chosen once for a model (paper/README.md): K_glue and the two jaw angles.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct Choice {
+    pub k_glue: f64,
+    pub slight_angle: f64,
+    pub wide_angle: f64,
+}
+
+impl Model {
+    pub fn name(self) -> &'static str {
+        match self {
+            Model::Face => crate::mesh::face::MAKEHUMAN,
+            Model::Procedural => "procedural mouth",
+        }
+    }
+
+    /// K_glue and the wide angle as Table 1's file has them (face) and the slight angle.
+    pub fn choice(self) -> Choice {
+        match self {
+            Model::Face => {
+                let t: toml::Table = toml::from_str(TABLE1).expect("table1.toml is TOML");
+                let num =
+                    |v: Option<&Value>| v.and_then(|v| v.as_float()).expect("table1.toml value");
+                Choice {
+                    k_glue: num(t["saliva"].as_array().and_then(|a| a[0].get("k_glue"))),
+                    slight_angle: SLIGHT_FACE,
+                    wide_angle: num(t["jaw"].get("angle")),
+                }
+            }
+            // paper/README.md before the face: chosen on the procedural mouth
+            Model::Procedural => Choice {
+                k_glue: 0.2,
+                slight_angle: 0.05,
+                wide_angle: 0.15,
+            },
+        }
+    }
+
+    /// Overrides that turn Table 1 into this model at full or quick resolution.
+    pub fn base(self, quick: bool) -> Vec<(String, Value)> {
+        let c = self.choice();
+        let res = Value::Float(if quick { 0.25 } else { 1.0 });
+        let mut o = match self {
+            Model::Face => vec![("mesh.face.resolution".to_string(), res)],
+            Model::Procedural => vec![
+                ("mesh.generator".to_string(), Value::String("mouth".into())),
+                ("mesh.mouth.resolution".to_string(), res),
+                ("saliva.0.k_glue".into(), Value::Float(c.k_glue)),
+                ("jaw.angle".into(), Value::Float(c.wide_angle)),
+            ],
+        };
+        if quick {
+            o.push(("time.total".into(), Value::Float(0.8)));
+        }
+        o
+    }
+}
+
+/// The slight jaw opening on the face (rad), chosen with K_glue (paper/README.md).
+pub const SLIGHT_FACE: f64 = 0.075;
+/// Moisture above the critical one: no glue (eq. 7 gives Z = 1): "without stickiness".
+pub const WET: f64 = 110.0;
+/// K_glue so large that the saliva never breaks (Z = 11: a stretch of 3.3): the load
+/// profile with breaking off.
+pub const NO_BREAKING: f64 = 10.0;
+
+/// A run: its name (its directory under `OUT/runs/`) and its overrides on Table 1.
+#[derive(Clone, Debug)]
+pub struct Spec {
+    pub name: String,
+    pub what: String,
+    pub overrides: Vec<(String, Value)>,
+}
+
+fn make(name: &str, what: &str, overrides: Vec<(&str, Value)>) -> Spec {
+    Spec {
+        name: name.into(),
+        what: what.into(),
+        overrides: overrides
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v))
+            .collect(),
+    }
+}
+
+fn muscle(name: &str) -> Value {
+    let mut t = toml::Table::new();
+    t.insert("name".into(), Value::String(name.into()));
+    t.insert("strength".into(), Value::Float(0.3));
+    t.insert("activation".into(), Value::Float(1.0));
+    t.insert("shape".into(), Value::String("smooth_step".into()));
+    t.insert("duration".into(), Value::Float(0.5));
+    Value::Table(t)
+}
+
+fn bands(edges: &[f64], values: &[f64]) -> Value {
+    let mut b = toml::Table::new();
+    b.insert(
+        "axis".into(),
+        Value::Array(vec![
+            Value::Float(1.0),
+            Value::Float(0.0),
+            Value::Float(0.0),
+        ]),
+    );
+    b.insert(
+        "edges".into(),
+        Value::Array(edges.iter().map(|e| Value::Float(*e)).collect()),
+    );
+    b.insert(
+        "values".into(),
+        Value::Array(values.iter().map(|e| Value::Float(*e)).collect()),
+    );
+    let mut t = toml::Table::new();
+    t.insert("bands".into(), Value::Table(b));
+    Value::Table(t)
+}
+
+/// K_glue values and jaw angles of the sweep (the chosen ones are among them).
+pub fn sweep_grid(quick: bool) -> (Vec<f64>, Vec<f64>) {
+    if quick {
+        (vec![0.05, 0.1, 0.15], vec![0.05, 0.075, 0.15])
+    } else {
+        (
+            vec![0.05, 0.08, 0.1, 0.12, 0.15, 0.18],
+            vec![0.05, 0.065, 0.075, 0.08, 0.1, 0.125, 0.15],
+        )
+    }
+}
+
+/// The name of a sweep run.
+pub fn sweep_name(k: f64, angle: f64) -> String {
+    format!("sweep_k{k}_a{angle}")
+}
+
+/// Every run the figures can ask for.
+pub fn all(model: Model, quick: bool) -> Vec<Spec> {
+    let c = model.choice();
+    let f = Value::Float;
+    let mut v = vec![
+        make(
+            "fig4_dry",
+            "wide opening without stickiness",
+            vec![("saliva.0.initial_moisture", f(WET))],
+        ),
+        make("fig4_sticky", "wide opening with stickiness", vec![]),
+        make(
+            "fig7_dry",
+            "slight opening without stickiness",
+            vec![
+                ("jaw.angle", f(c.slight_angle)),
+                ("saliva.0.initial_moisture", f(WET)),
+            ],
+        ),
+        make(
+            "fig7_sticky",
+            "slight opening with stickiness",
+            vec![("jaw.angle", f(c.slight_angle))],
+        ),
+        make(
+            "fig9_bands",
+            "slight opening, two wet bands (no glue) either side of the centre",
+            vec![
+                ("jaw.angle", f(c.slight_angle)),
+                (
+                    "saliva.0.initial_moisture",
+                    bands(
+                        &[-0.016, -0.006, 0.006, 0.016],
+                        &[100.0, WET, 100.0, WET, 100.0],
+                    ),
+                ),
+            ],
+        ),
+        make(
+            "fig10_asym",
+            "wide opening with the depressors of the subject's left side active",
+            vec![(
+                "model_muscle",
+                Value::Array(vec![
+                    muscle("depressor_labii_inferioris_l"),
+                    muscle("depressor_anguli_oris_l"),
+                ]),
+            )],
+        ),
+        make(
+            "load_profile",
+            "wide opening with breaking off (K_glue = 10): the load on the saliva",
+            vec![("saliva.0.k_glue", f(NO_BREAKING))],
+        ),
+    ];
+    let (ks, angles) = sweep_grid(quick);
+    for &a in &angles {
+        for &k in &ks {
+            v.push(make(
+                &sweep_name(k, a),
+                "K_glue x jaw angle sweep",
+                vec![("saliva.0.k_glue", f(k)), ("jaw.angle", f(a))],
+            ));
+        }
+    }
+    v
+}
+
+/// The scenario text of run `s` on `model` (quick or full) and its problem; `label` names the
+/// scenario in errors (e.g. the path it is written to).
+pub fn scenario_of(
+    model: Model,
+    quick: bool,
+    s: &Spec,
+    label: &std::path::Path,
+) -> Result<(String, Problem)> {
+    let mut o: Vec<(String, Value)> = model.base(quick);
+    o.extend(s.overrides.iter().cloned());
+    let refs: Vec<(&str, Value)> = o.iter().map(|(k, v)| (k.as_str(), v.clone())).collect();
+    let mut text = scenario::with_overrides(TABLE1, TABLE1_NAME, &refs)?;
+    text.insert_str(
+        0,
+        &format!(
+            "# sticky-lips paper, run {}: {} ({}; {})\n",
+            s.name,
+            s.what,
+            model.name(),
+            if quick { "--quick" } else { "full resolution" }
+        ),
+    );
+    let problem = scenario::parse(&text, label)?.problem;
+    Ok((text, problem))
+}
+
+/// The run called `name` of [`all`].
+pub fn spec(model: Model, quick: bool, name: &str) -> Option<Spec> {
+    all(model, quick).into_iter().find(|s| s.name == name)
+}
