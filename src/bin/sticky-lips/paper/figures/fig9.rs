@@ -1,6 +1,9 @@
 //! Fig. 9: moisture varying along the lips: two wet bands (moisture above critical: no
-//! glue) either side of the centre; the wet parts separate, the glued parts hold. Saliva
-//! elements are coloured by their moisture (wet blue, gluing green).
+//! glue) either side of the centre, at the slight opening. The wet parts separate first; the
+//! glued parts (the centre and the corners) hold for a while and then let go as well. The
+//! figure is the frame halfway between the last wet column opening and the first glued one
+//! (the last frame if no glued column opens). Saliva elements are coloured by their moisture
+//! (wet blue, gluing green).
 
 use crate::paper::look::{
     element_codes, render, skin_colours, Paint, CAVITY, GREEN, WET_BLUE, WHITE,
@@ -27,12 +30,52 @@ pub fn produce(ctx: &Context) -> Result<Output> {
         (2, false) => GREEN,
         _ => skin[e as usize],
     };
-    let last = run.last();
+    // a counted column is wet if every saliva element at its upper node is wet, glued if
+    // none is (the columns on a band's edge are neither)
+    let z = &run.zip;
+    let cols = &run.measures.columns;
+    let mut wet_times = Vec::new();
+    let mut glued_times = Vec::new();
+    for c in 0..cols.x.len() {
+        if !z.counted[c] {
+            continue;
+        }
+        let u = cols.upper[c];
+        let around: Vec<bool> = disc
+            .saliva
+            .elements
+            .iter()
+            .filter(|&&e| p.mesh.elements[e as usize].contains(&u))
+            .map(|&e| wet[e as usize])
+            .collect();
+        let t = z.opening_time[c];
+        if !around.is_empty() && around.iter().all(|w| *w) {
+            wet_times.push(t);
+        } else if around.iter().all(|w| !*w) {
+            glued_times.push(t);
+        }
+    }
+    let last_wet = wet_times
+        .iter()
+        .flatten()
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
+    let all_wet_open = wet_times.iter().all(|t| t.is_some());
+    let first_glued = glued_times
+        .iter()
+        .flatten()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    let frame = if all_wet_open && first_glued.is_finite() && first_glued > last_wet {
+        run.frame_at(0.5 * (last_wet + first_glued))
+    } else {
+        run.last()
+    };
     let img = render(
         p,
-        &run.measures.columns,
-        &run.displacement(last)?,
-        &run.broken(last)?,
+        cols,
+        &run.displacement(frame)?,
+        &run.broken(frame)?,
         Paint::Elements(&colour),
         CAVITY,
         900,
@@ -46,42 +89,22 @@ pub fn produce(ctx: &Context) -> Result<Output> {
         18.0,
         WHITE,
     );
-    // which columns are open at the end, wet or glued
-    let z = &run.zip;
-    let cols = &run.measures.columns;
-    let mut wet_open = (0, 0);
-    let mut glued_open = (0, 0);
-    for c in 0..cols.x.len() {
-        if !z.counted[c] {
-            continue;
-        }
-        // a column is wet if a wet saliva element touches its upper node
-        let u = cols.upper[c];
-        let is_wet = disc
-            .saliva
-            .elements
-            .iter()
-            .any(|&e| wet[e as usize] && p.mesh.elements[e as usize].contains(&u));
-        let slot = if is_wet {
-            &mut wet_open
-        } else {
-            &mut glued_open
-        };
-        slot.1 += 1;
-        if z.final_open[c] {
-            slot.0 += 1;
-        }
-    }
+    let t = run.measures.frames[frame].time;
+    let open_at = |list: &[Option<f64>]| list.iter().filter(|o| o.is_some_and(|o| o <= t)).count();
     Ok(Output {
         images: vec![(
             "fig9_moisture_bands.png".into(),
             Image::grid(&[img, legend], 1, 8, WHITE),
         )],
         measured: json!({
-            "wet_columns_open": wet_open.0, "wet_columns": wet_open.1,
-            "glued_columns_open": glued_open.0, "glued_columns": glued_open.1,
+            "frame_time_s": t,
+            "wet_columns": wet_times.len(),
+            "wet_columns_open_at_frame": open_at(&wet_times),
+            "glued_columns": glued_times.len(),
+            "glued_columns_open_at_frame": open_at(&glued_times),
+            "last_wet_opening_s": if last_wet.is_finite() { Some(last_wet) } else { None },
+            "first_glued_opening_s": if first_glued.is_finite() { Some(first_glued) } else { None },
             "final_open_fraction": z.final_open_fraction,
-            "final_broken": run.measures.frames[last].broken,
         }),
     })
 }

@@ -11,6 +11,7 @@ mod fig8;
 mod fig9;
 mod load;
 mod plots;
+mod study;
 mod sweep;
 mod zip;
 
@@ -115,6 +116,12 @@ pub const TABLE: &[Figure] = &[
         what: "K_glue x jaw angle: equilibrium open fraction and where the opening starts",
         runs: sweep_runs,
         produce: sweep::produce,
+    },
+    Figure {
+        name: "study",
+        what: "what sets the zip front's speed",
+        runs: |_, quick| study::names(quick),
+        produce: study::produce,
     },
     Figure {
         name: "plots",
