@@ -181,14 +181,15 @@ mod tests {
 
     #[test]
     fn thresholds_decide_each_claim() {
-        assert!(c1(&zip(None, Some(0.1), Some(0.14))).holds);
-        assert!(!c1(&zip(None, Some(0.1), Some(0.15))).holds);
+        assert!(c1(&zip(None, Some(0.1), Some(0.139))).holds);
+        assert!(!c1(&zip(None, Some(0.1), Some(0.141))).holds);
         assert!(!c1(&zip(None, Some(0.1), None)).holds);
         assert!(c2(&zip(Some((0.1, 0.2)), None, None)).holds);
+        assert!(c2(&zip(Some((0.1, 0.19)), None, None)).holds);
         assert!(!c2(&zip(Some((0.1, 0.25)), None, None)).holds);
         assert!(!c2(&zip(None, None, None)).holds);
-        assert!(c3(&zip(None, Some(0.1), Some(0.18))).holds);
-        assert!(!c3(&zip(None, Some(0.1), Some(0.17))).holds);
+        assert!(c3(&zip(None, Some(0.1), Some(0.181))).holds);
+        assert!(!c3(&zip(None, Some(0.1), Some(0.179))).holds);
         assert!(c4(&zip(None, None, None)).holds);
         // 2 of 3 counted open, the centre open, the 0.8 w column joined
         assert!(c5(&zip(None, None, None)).holds);
