@@ -63,7 +63,11 @@ cargo clippy --all-targets -- -D warnings
 cargo clippy --all-targets --no-default-features -- -D warnings
 
 step "cargo test (unit tests, verification suite, doc tests)"
-cargo test --all-targets
+OUT="$ROOT/target/test-outputs"
+rm -rf "$OUT"
+# verification/paper_claims.rs runs the coarse face's claim runs through the driver into the
+# `paper --quick` directory below, whose --reuse then takes them instead of repeating them
+STICKY_LIPS_PAPER_RUNS="$OUT/paper-quick/runs" cargo test --all-targets
 cargo test --doc
 
 step "CLI runs, outputs checked with meshio"
@@ -71,8 +75,6 @@ step "CLI runs, outputs checked with meshio"
 # rather than a second full build of every dependency in the release profile
 BIN="$ROOT/target/debug/sticky-lips"
 test -x "$BIN"
-OUT="$ROOT/target/test-outputs"
-rm -rf "$OUT"
 "$BIN" check examples/cantilever.toml
 "$BIN" run examples/cantilever.toml --out "$OUT/cantilever" --quiet
 "$BIN" run examples/cantilever.toml --out "$OUT/cantilever_f32" --precision f32 --threads 2 --quiet
@@ -116,7 +118,12 @@ elif [ "$rc" != 0 ]; then
 fi
 
 step "paper --quick: every figure from one command (coarse face)"
-"$BIN" paper --quick --out "$OUT/paper-quick" --threads 2
+# from any directory (the scenario and the face are compiled in): one figure first ...
+(cd "$(mktemp -d)" && "$BIN" paper --quick --only fig2 --out "$OUT/paper-quick" --reuse >/dev/null 2>&1) ||
+  { echo "paper --only fig2 failed outside the checkout" >&2; exit 1; }
+test -s "$OUT/paper-quick/fig2_materials.png"
+# ... then all of them (reusing the runs paper_claims made)
+"$BIN" paper --quick --out "$OUT/paper-quick" --threads 2 --reuse
 for f in fig1_sticky_opening fig2_materials fig4_opening_over_time fig6_blend_baseline fig7_slight_opening \
          fig7_gap_profiles fig8_wide_opening fig8_gap_profiles fig9_moisture_bands fig10_asymmetric \
          fig11_textured plot_load_profile plot_zip_front plot_zip_study plot_kglue_sweep plot_open_fraction plot_broken \
@@ -127,10 +134,6 @@ test -s "$OUT/paper-quick/table1.md" && test -s "$OUT/paper-quick/measured.json"
 for r in fig4_sticky fig7_sticky; do
   STICKY_LIPS_OUT="$OUT/paper-quick/runs/$r" "$PY" -m pytest -q scripts/check_outputs.py
 done
-# the same figures from any directory (the scenario and the face are compiled in)
-(cd "$(mktemp -d)" && "$BIN" paper --quick --only fig2 --out "$OUT/paper-elsewhere" >/dev/null 2>&1) ||
-  { echo "paper --only fig2 failed outside the checkout" >&2; exit 1; }
-test -s "$OUT/paper-elsewhere/fig2_materials.png"
 # the procedural mouth still makes every figure
 "$BIN" paper --quick --model procedural --only fig4 --out "$OUT/paper-procedural" --threads 2
 test -s "$OUT/paper-procedural/fig4_opening_over_time.png"

@@ -11,9 +11,8 @@
 //! `paper/README.md` and `paper/figures/measured.json`.
 
 use sticky_lips::claims;
-use sticky_lips::measures::{RunMeasures, ZipFront, OPEN_THRESHOLD, ZIP_THRESHOLD};
+use sticky_lips::measures::{RunMeasures, ZipFront, ZIP_THRESHOLD};
 use sticky_lips::paper::{self, Model};
-use sticky_lips::tled::Simulation;
 use sticky_lips::Problem;
 
 /// A finished coarse run: its problem, measures at every output frame (0.01 s), zip front
@@ -25,28 +24,46 @@ struct Run {
     u: Vec<[f64; 3]>,
 }
 
+/// Runs `name` through the driver, as `sticky-lips paper --quick` does. The outputs go to
+/// `$STICKY_LIPS_PAPER_RUNS/NAME/` when that is set (`scripts/test.sh` sets it to its
+/// `paper --quick` directory, whose `--reuse` then takes these runs instead of repeating
+/// them: the same scenario text, the same step count), else to a temporary directory that is
+/// removed afterwards.
 fn run(name: &str) -> Run {
+    use sticky_lips::driver::{self, Backend, Progress, RunOptions};
     let spec = paper::spec(Model::Face, true, name).expect("a paper run");
-    let (_, p) = paper::scenario_of(Model::Face, true, &spec, std::path::Path::new(name)).unwrap();
-    let mut sim = Simulation::<f64>::new(&p).unwrap();
-    let mut m = RunMeasures::new(p.physics.lip_columns.clone().unwrap(), OPEN_THRESHOLD);
-    m.push(0.0, &p.mesh.nodes, &sim.displacement_f64(), 0);
-    while !sim.is_finished() {
-        for _ in 0..p.time.output_every {
-            if sim.is_finished() {
-                break;
-            }
-            sim.step().unwrap();
-        }
-        m.push(
-            sim.time(),
-            &p.mesh.nodes,
-            &sim.displacement_f64(),
-            sim.saliva().broken_count(),
-        );
+    let (dir, keep) = match std::env::var_os("STICKY_LIPS_PAPER_RUNS") {
+        Some(d) => (std::path::PathBuf::from(d).join(name), true),
+        None => (
+            std::env::temp_dir().join(format!("sticky-lips-claims-{}-{name}", std::process::id())),
+            false,
+        ),
+    };
+    let (text, p) =
+        paper::scenario_of(Model::Face, true, &spec, &dir.join("scenario.toml")).unwrap();
+    std::fs::create_dir_all(&dir).unwrap();
+    sticky_lips::io::atomic::write_atomic(&dir.join("scenario.toml"), text.as_bytes()).unwrap();
+    driver::run(
+        &p,
+        &RunOptions {
+            out: dir.clone(),
+            precision: sticky_lips::Precision::F64,
+            backend: Backend::Cpu,
+            threads: 1,
+            force_dt: false,
+            progress: Progress::Quiet,
+        },
+    )
+    .unwrap();
+    let m: RunMeasures =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("measures.json")).unwrap()).unwrap();
+    let (u, _, _) =
+        sticky_lips::io::vtu::read_point_data_f64(&dir.join("final.vtu"), "displacement").unwrap();
+    let u: Vec<[f64; 3]> = u.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+    if !keep {
+        let _ = std::fs::remove_dir_all(&dir);
     }
     let zip = ZipFront::new(&m, ZIP_THRESHOLD);
-    let u = sim.displacement_f64();
     Run { p, m, zip, u }
 }
 
