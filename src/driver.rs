@@ -2,11 +2,11 @@
 //! progress, summary. Used by the CLI (`sticky-lips run`, `equilibrium`) and by tests.
 
 use crate::error::Result;
-use crate::io::output::{FrameWriter, SalivaFrame};
+use crate::io::output::{Frame, FrameWriter, SalivaFrame};
 use crate::problem::Problem;
 use crate::real::{Precision, Real};
 use crate::static_solve::{solve_equilibrium, StaticOptions};
-use crate::tled::solver::Energies;
+use crate::tled::solver::{volume_ratios, Energies};
 use crate::tled::stability::{analyse, check_time_step, StabilityReport};
 use crate::tled::Simulation;
 use std::path::PathBuf;
@@ -276,6 +276,7 @@ fn run_with<S: Stepper>(
         &problem.mesh.nodes,
         &problem.mesh.elements,
         &problem.element_material,
+        &sim.disc().saliva.elements,
     )?;
     let mut energy = EnergySeries::default();
     let mut broken = Vec::new();
@@ -300,7 +301,13 @@ fn run_with<S: Stepper>(
         if saliva.is_some() {
             broken.push(broken_count);
         }
-        writer.frame(sim.time(), &u, sim.disc(), saliva)
+        let volume_ratio = volume_ratios(sim.disc(), &u);
+        writer.frame(Frame {
+            time: sim.time(),
+            u,
+            volume_ratio,
+            saliva,
+        })
     };
     record(&mut sim, &mut writer)?;
     let n = sim.num_steps();
@@ -353,7 +360,7 @@ fn run_with<S: Stepper>(
     if let Some(m) = &measures {
         write_measures(&opts.out, m)?;
     }
-    writer.finish(sim.disc(), &summary)?;
+    writer.finish(&summary)?;
     Ok(summary)
 }
 
@@ -400,8 +407,14 @@ pub fn equilibrium(
             &problem.mesh.nodes,
             &problem.mesh.elements,
             &problem.element_material,
+            &[],
         )?;
-        writer.frame(problem.time.total_time, &res.u, &disc, None)?;
+        writer.frame(Frame {
+            time: problem.time.total_time,
+            u: res.u.clone(),
+            volume_ratio: volume_ratios(&disc, &res.u),
+            saliva: None,
+        })?;
         let strain = crate::tled::solver::strain_energy(&disc, &res.u);
         let report = analyse(problem, &disc);
         let summary = RunSummary {
@@ -433,7 +446,7 @@ pub fn equilibrium(
             newton_iterations: Some(res.newton_iterations),
             residual_norm: Some(res.residual_norm),
         };
-        writer.finish(&disc, &summary)?;
+        writer.finish(&summary)?;
         Ok(summary)
     })
 }

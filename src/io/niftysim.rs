@@ -35,26 +35,13 @@ impl Ctx<'_> {
     }
 
     /// Whitespace-separated tokens of the direct text children of `n`, each with its line.
-    fn tokens(&self, n: Node) -> Vec<(String, usize)> {
+    /// The whitespace-separated tokens of `n`'s text, each with its line number.
+    fn tokens<'a>(&self, n: Node<'a, '_>) -> Vec<(&'a str, usize)> {
         let mut out = Vec::new();
         for c in n.children().filter(|c| c.is_text()) {
-            let text = c.text().unwrap_or("");
-            let mut line = self.line(c);
-            let mut cur = String::new();
-            for ch in text.chars() {
-                if ch.is_whitespace() {
-                    if !cur.is_empty() {
-                        out.push((std::mem::take(&mut cur), line));
-                    }
-                    if ch == '\n' {
-                        line += 1;
-                    }
-                } else {
-                    cur.push(ch);
-                }
-            }
-            if !cur.is_empty() {
-                out.push((cur, line));
+            let line = self.line(c);
+            for (k, text_line) in c.text().unwrap_or("").split('\n').enumerate() {
+                out.extend(text_line.split_whitespace().map(|t| (t, line + k)));
             }
         }
         out

@@ -1,6 +1,7 @@
 //! Run outputs: one VTU per output frame, a `.pvd` collection rewritten after every frame
-//! (so it only ever lists complete frames), `final.vtu` and `summary.json`. Every file is
-//! written atomically (temporary file, then rename).
+//! (so it only ever lists complete frames), `final.vtu` (a copy of the last frame) and
+//! `summary.json`. Every file is written atomically (temporary file, then rename), on a
+//! writer thread of its own so that the time stepping does not wait for the disk.
 //!
 //! Point positions in the VTU files are the deformed configuration `X + u` (ParaView
 //! animates the `.pvd` directly); point data `displacement` is `u` in metres; cell data
@@ -12,18 +13,22 @@
 use crate::error::{Error, Result};
 use crate::io::atomic::write_atomic;
 use crate::io::vtu::{write_pvd, write_vtu, DataArray, PvdEntry, VtuFrame};
-use crate::tled::precompute::Discretisation;
-use crate::tled::solver::displacement_gradient;
 use std::path::{Path, PathBuf};
+use std::sync::mpsc::{sync_channel, SyncSender};
+use std::sync::Arc;
+use std::thread::JoinHandle;
 
-/// Writes the frames of one run into a directory.
-pub struct FrameWriter {
-    dir: PathBuf,
-    reference: Vec<[f64; 3]>,
-    elements: Vec<[u32; 8]>,
-    material: Vec<i32>,
-    entries: Vec<PvdEntry>,
-    last: Option<(f64, Vec<[f64; 3]>, Option<SalivaFrame>)>,
+/// What one frame holds, in `f64`, computed by the caller from the solver's state.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    /// Simulated time (s).
+    pub time: f64,
+    /// Nodal displacements (m), input node order.
+    pub u: Vec<[f64; 3]>,
+    /// `J = det F` per element, input element order.
+    pub volume_ratio: Vec<f64>,
+    /// The saliva elements' state, when the model has any.
+    pub saliva: Option<SalivaFrame>,
 }
 
 /// The saliva elements' state at a frame, in saliva-element order (see `SalivaPlan`).
@@ -36,13 +41,48 @@ pub struct SalivaFrame {
     pub broken_at: Vec<f64>,
 }
 
+/// The model's fixed data every frame file repeats.
+struct Model {
+    reference: Vec<[f64; 3]>,
+    elements: Vec<[u32; 8]>,
+    material: Vec<i32>,
+    /// Element index of each saliva element, in saliva-element order.
+    saliva_elements: Vec<u32>,
+}
+
+/// One frame for the writer thread: the file, its data, and the `.pvd` listing it.
+struct Job {
+    path: PathBuf,
+    frame: Frame,
+    pvd: Vec<PvdEntry>,
+}
+
+/// Writes the frames of one run into a directory.
+///
+/// The files are encoded and written on a writer thread, so that the stepping goes on while
+/// a frame is written; at most one frame waits in the queue. The order of the files and
+/// their bytes do not depend on this: each frame file is complete (written atomically)
+/// before the `.pvd` that lists it. An error of the writer thread is reported by the next
+/// [`FrameWriter::frame`] or by [`FrameWriter::finish`]; dropping the writer (e.g. when a
+/// run stops with an error) waits for the frames already handed over.
+pub struct FrameWriter {
+    dir: PathBuf,
+    model: Arc<Model>,
+    entries: Vec<PvdEntry>,
+    /// File name of the last frame (copied to `final.vtu` by `finish`).
+    last: Option<String>,
+    worker: Option<(SyncSender<Job>, JoinHandle<Result<()>>)>,
+}
+
 impl FrameWriter {
-    /// Creates `dir` and removes frames left there by an earlier run.
+    /// Creates `dir` and removes frames left there by an earlier run. `saliva_elements` is
+    /// the element index of each saliva element (empty without saliva).
     pub fn new(
         dir: &Path,
         reference: &[[f64; 3]],
         elements: &[[u32; 8]],
         material: &[u32],
+        saliva_elements: &[u32],
     ) -> Result<Self> {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
@@ -56,13 +96,31 @@ impl FrameWriter {
                 std::fs::remove_file(entry.path()).map_err(|e| Error::io(entry.path(), e))?;
             }
         }
-        Ok(FrameWriter {
-            dir: dir.to_path_buf(),
+        let model = Arc::new(Model {
             reference: reference.to_vec(),
             elements: elements.to_vec(),
             material: material.iter().map(|&m| m as i32).collect(),
+            saliva_elements: saliva_elements.to_vec(),
+        });
+        let (tx, rx) = sync_channel::<Job>(1);
+        let m = Arc::clone(&model);
+        let handle = std::thread::Builder::new()
+            .name("frame-writer".into())
+            .spawn(move || -> Result<()> {
+                for job in rx {
+                    write_frame_file(&m, &job.path, &job.frame)?;
+                    let pvd = job.path.with_file_name("frames.pvd");
+                    write_pvd(&pvd, &job.pvd).map_err(|e| Error::io(&pvd, e))?;
+                }
+                Ok(())
+            })
+            .map_err(|e| Error::io(dir, e))?;
+        Ok(FrameWriter {
+            dir: dir.to_path_buf(),
+            model,
             entries: Vec::new(),
             last: None,
+            worker: Some((tx, handle)),
         })
     }
 
@@ -73,114 +131,296 @@ impl FrameWriter {
         self.entries.len()
     }
 
-    fn write_file(
-        &self,
-        path: &Path,
-        time: f64,
-        u: &[[f64; 3]],
-        disc: &Discretisation,
-        saliva: Option<&SalivaFrame>,
-    ) -> Result<()> {
-        let points: Vec<[f64; 3]> = self
-            .reference
-            .iter()
-            .zip(u)
-            .map(|(x, d)| [x[0] + d[0], x[1] + d[1], x[2] + d[2]])
-            .collect();
-        let disp: Vec<f64> = u.iter().flatten().copied().collect();
-        let j: Vec<f64> = (0..disc.num_elements())
-            .map(|e| {
-                1.0 + crate::linalg::det_identity_plus_minus_one(&displacement_gradient(disc, u, e))
-            })
-            .collect();
-        let ne = disc.num_elements();
-        let spread = |v: &[f64]| {
-            let mut out = vec![f64::NAN; ne];
-            for (k, &e) in disc.saliva.elements.iter().enumerate() {
-                out[e as usize] = v[k];
-            }
-            out
-        };
-        let (moisture, z, q, broken_at, broken) = match saliva {
-            Some(s) => {
-                let mut b = vec![-1i32; ne];
-                for (k, &e) in disc.saliva.elements.iter().enumerate() {
-                    b[e as usize] = s.broken[k] as i32;
-                }
-                (
-                    spread(&s.moisture),
-                    spread(&s.z),
-                    spread(&s.q),
-                    spread(&s.broken_at),
-                    b,
-                )
-            }
-            None => Default::default(),
-        };
-        let f64_cell = |name, data| DataArray::F64 {
-            name,
-            components: 1,
-            data,
-        };
-        let mut cell_data = vec![
-            DataArray::I32 {
-                name: "material",
-                components: 1,
-                data: &self.material,
-            },
-            f64_cell("volume_ratio", &j),
-        ];
-        if saliva.is_some() {
-            cell_data.extend([
-                f64_cell("saliva_moisture", &moisture),
-                f64_cell("saliva_Z", &z),
-                f64_cell("saliva_Q", &q),
-                DataArray::I32 {
-                    name: "saliva_broken",
-                    components: 1,
-                    data: &broken,
-                },
-                f64_cell("saliva_broken_at", &broken_at),
-            ]);
-        }
-        let frame = VtuFrame {
-            points: &points,
-            hexahedra: &self.elements,
-            point_data: vec![DataArray::F64 {
-                name: "displacement",
-                components: 3,
-                data: &disp,
-            }],
-            cell_data,
-            time: Some(time),
-        };
-        write_vtu(path, &frame).map_err(|e| Error::io(path, e))
-    }
-
-    /// Writes `frame_NNNNNN.vtu` for displacement `u` at `time`, then the updated `.pvd`.
-    pub fn frame(
-        &mut self,
-        time: f64,
-        u: &[[f64; 3]],
-        disc: &Discretisation,
-        saliva: Option<SalivaFrame>,
-    ) -> Result<()> {
+    /// Hands `frame_NNNNNN.vtu` and the updated `.pvd` to the writer thread.
+    pub fn frame(&mut self, frame: Frame) -> Result<()> {
+        self.check_lengths(&frame)?;
         let name = format!("frame_{:06}.vtu", self.entries.len());
-        self.write_file(&self.dir.join(&name), time, u, disc, saliva.as_ref())?;
-        self.entries.push(PvdEntry { time, file: name });
-        let pvd = self.dir.join("frames.pvd");
-        write_pvd(&pvd, &self.entries).map_err(|e| Error::io(&pvd, e))?;
-        self.last = Some((time, u.to_vec(), saliva));
+        self.entries.push(PvdEntry {
+            time: frame.time,
+            file: name.clone(),
+        });
+        let job = Job {
+            path: self.dir.join(&name),
+            frame,
+            pvd: self.entries.clone(),
+        };
+        let sent = match &self.worker {
+            Some((tx, _)) => tx.send(job).is_ok(),
+            None => false,
+        };
+        if !sent {
+            // The writer thread stopped: its error says why.
+            self.join()?;
+            return Err(Error::io(
+                &self.dir,
+                std::io::Error::other("the frame writer thread has stopped"),
+            ));
+        }
+        self.last = Some(name);
         Ok(())
     }
 
-    /// Writes `final.vtu` (the last frame) and `summary.json`.
-    pub fn finish<S: serde::Serialize>(&self, disc: &Discretisation, summary: &S) -> Result<()> {
-        if let Some((t, u, s)) = &self.last {
-            self.write_file(&self.dir.join("final.vtu"), *t, u, disc, s.as_ref())?;
+    fn check_lengths(&self, f: &Frame) -> Result<()> {
+        let m = &self.model;
+        let ok = f.u.len() == m.reference.len()
+            && f.volume_ratio.len() == m.elements.len()
+            && f.saliva.as_ref().is_none_or(|s| {
+                let n = m.saliva_elements.len();
+                [
+                    s.moisture.len(),
+                    s.z.len(),
+                    s.q.len(),
+                    s.broken.len(),
+                    s.broken_at.len(),
+                ]
+                .iter()
+                .all(|&l| l == n)
+            });
+        if ok {
+            Ok(())
+        } else {
+            Err(Error::io(
+                &self.dir,
+                std::io::Error::other(
+                    "frame data does not match the model (nodes, elements or saliva elements)",
+                ),
+            ))
+        }
+    }
+
+    /// Waits for the writer thread to write every frame handed over; its error, if any.
+    fn join(&mut self) -> Result<()> {
+        match self.worker.take() {
+            Some((tx, handle)) => {
+                drop(tx);
+                match handle.join() {
+                    Ok(r) => r,
+                    Err(_) => Err(Error::io(
+                        &self.dir,
+                        std::io::Error::other("the frame writer thread panicked"),
+                    )),
+                }
+            }
+            None => Ok(()),
+        }
+    }
+
+    /// Waits for the frames, then writes `final.vtu` (a copy of the last frame) and
+    /// `summary.json`.
+    pub fn finish<S: serde::Serialize>(mut self, summary: &S) -> Result<()> {
+        self.join()?;
+        if let Some(name) = &self.last {
+            let from = self.dir.join(name);
+            let bytes = std::fs::read(&from).map_err(|e| Error::io(&from, e))?;
+            let to = self.dir.join("final.vtu");
+            write_atomic(&to, &bytes).map_err(|e| Error::io(&to, e))?;
         }
         let path = self.dir.join("summary.json");
         let json = serde_json::to_vec_pretty(summary).expect("summary serialises");
         write_atomic(&path, &json).map_err(|e| Error::io(&path, e))
+    }
+}
+
+impl Drop for FrameWriter {
+    fn drop(&mut self) {
+        // The frames handed over are written; an error is reported by frame() or finish().
+        let _ = self.join();
+    }
+}
+
+/// Encodes one frame as a VTU file at `path` (atomically).
+fn write_frame_file(m: &Model, path: &Path, f: &Frame) -> Result<()> {
+    let points: Vec<[f64; 3]> = m
+        .reference
+        .iter()
+        .zip(&f.u)
+        .map(|(x, d)| [x[0] + d[0], x[1] + d[1], x[2] + d[2]])
+        .collect();
+    let disp: Vec<f64> = f.u.iter().flatten().copied().collect();
+    let ne = m.elements.len();
+    let spread = |v: &[f64]| {
+        let mut out = vec![f64::NAN; ne];
+        for (k, &e) in m.saliva_elements.iter().enumerate() {
+            out[e as usize] = v[k];
+        }
+        out
+    };
+    let (moisture, z, q, broken_at, broken) = match &f.saliva {
+        Some(s) => {
+            let mut b = vec![-1i32; ne];
+            for (k, &e) in m.saliva_elements.iter().enumerate() {
+                b[e as usize] = s.broken[k] as i32;
+            }
+            (
+                spread(&s.moisture),
+                spread(&s.z),
+                spread(&s.q),
+                spread(&s.broken_at),
+                b,
+            )
+        }
+        None => Default::default(),
+    };
+    let f64_cell = |name, data| DataArray::F64 {
+        name,
+        components: 1,
+        data,
+    };
+    let mut cell_data = vec![
+        DataArray::I32 {
+            name: "material",
+            components: 1,
+            data: &m.material,
+        },
+        f64_cell("volume_ratio", &f.volume_ratio),
+    ];
+    if f.saliva.is_some() {
+        cell_data.extend([
+            f64_cell("saliva_moisture", &moisture),
+            f64_cell("saliva_Z", &z),
+            f64_cell("saliva_Q", &q),
+            DataArray::I32 {
+                name: "saliva_broken",
+                components: 1,
+                data: &broken,
+            },
+            f64_cell("saliva_broken_at", &broken_at),
+        ]);
+    }
+    let frame = VtuFrame {
+        points: &points,
+        hexahedra: &m.elements,
+        point_data: vec![DataArray::F64 {
+            name: "displacement",
+            components: 3,
+            data: &disp,
+        }],
+        cell_data,
+        time: Some(f.time),
+    };
+    write_vtu(path, &frame).map_err(|e| Error::io(path, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(tag: &str) -> PathBuf {
+        let d =
+            std::env::temp_dir().join(format!("sticky_lips_output_{tag}_{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        d
+    }
+
+    /// One hexahedron, the unit cube.
+    fn cube() -> (Vec<[f64; 3]>, Vec<[u32; 8]>) {
+        let x: Vec<[f64; 3]> = (0..8)
+            .map(|k| [(k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64])
+            .collect();
+        (x, vec![[0, 1, 3, 2, 4, 5, 7, 6]])
+    }
+
+    fn frame(t: f64) -> Frame {
+        Frame {
+            time: t,
+            u: vec![[t, 0.0, 0.0]; 8],
+            volume_ratio: vec![1.0],
+            saliva: None,
+        }
+    }
+
+    fn names(d: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn frames_in_order_and_final_is_the_last() {
+        let d = scratch("order");
+        let (x, el) = cube();
+        let mut w = FrameWriter::new(&d, &x, &el, &[0], &[]).unwrap();
+        for k in 0..5 {
+            w.frame(frame(k as f64 * 0.1)).unwrap();
+        }
+        assert_eq!(w.frames_written(), 5);
+        w.finish(&serde_json::json!({"ok": true})).unwrap();
+        let expected: Vec<PvdEntry> = (0..5)
+            .map(|k| PvdEntry {
+                time: k as f64 * 0.1,
+                file: format!("frame_{k:06}.vtu"),
+            })
+            .collect();
+        let pvd = std::fs::read_to_string(d.join("frames.pvd")).unwrap();
+        assert_eq!(pvd, crate::io::vtu::pvd_string(&expected).unwrap());
+        assert_eq!(
+            std::fs::read(d.join("final.vtu")).unwrap(),
+            std::fs::read(d.join("frame_000004.vtu")).unwrap()
+        );
+        assert!(names(&d).iter().all(|n| !n.contains(".tmp-")));
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn dropping_the_writer_leaves_every_frame_handed_over() {
+        let d = scratch("drop");
+        let (x, el) = cube();
+        let mut w = FrameWriter::new(&d, &x, &el, &[0], &[]).unwrap();
+        for k in 0..3 {
+            w.frame(frame(k as f64)).unwrap();
+        }
+        drop(w); // as when a run stops with an error
+        assert_eq!(
+            names(&d),
+            [
+                "frame_000000.vtu",
+                "frame_000001.vtu",
+                "frame_000002.vtu",
+                "frames.pvd"
+            ]
+        );
+        let pvd = std::fs::read_to_string(d.join("frames.pvd")).unwrap();
+        assert_eq!(pvd.matches("<DataSet").count(), 3, "{pvd}");
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn a_write_error_names_the_file() {
+        let d = scratch("error");
+        let (x, el) = cube();
+        let mut w = FrameWriter::new(&d, &x, &el, &[0], &[]).unwrap();
+        std::fs::remove_dir_all(&d).unwrap(); // the directory goes away under the run
+        let mut err = None;
+        for k in 0..3 {
+            if let Err(e) = w.frame(frame(k as f64)) {
+                err = Some(e);
+                break;
+            }
+        }
+        let e = match err {
+            Some(e) => e,
+            None => w.finish(&serde_json::json!({})).unwrap_err(),
+        };
+        let text = e.to_string();
+        assert!(text.contains("frame_00000"), "{text}");
+    }
+
+    #[test]
+    fn data_that_does_not_fit_the_model_is_refused() {
+        let d = scratch("lengths");
+        let (x, el) = cube();
+        let mut w = FrameWriter::new(&d, &x, &el, &[0], &[]).unwrap();
+        let mut f = frame(0.0);
+        f.u.pop();
+        assert!(w.frame(f).is_err());
+        let mut f = frame(0.0);
+        f.volume_ratio.push(1.0);
+        assert!(w.frame(f).is_err());
+        assert_eq!(w.frames_written(), 0);
+        drop(w);
+        std::fs::remove_dir_all(&d).unwrap();
     }
 }

@@ -320,6 +320,14 @@ pub fn displacement_gradient(d: &Discretisation, u: &[[f64; 3]], e: usize) -> [[
     h
 }
 
+/// `J = det F = det(I + H)` of every element at the element's gradient point (input element
+/// order), as the frames' `volume_ratio` records it.
+pub fn volume_ratios(d: &Discretisation, u: &[[f64; 3]]) -> Vec<f64> {
+    (0..d.num_elements())
+        .map(|e| 1.0 + crate::linalg::det_identity_plus_minus_one(&displacement_gradient(d, u, e)))
+        .collect()
+}
+
 /// Stored energy of the discretisation (J): `sum_e W_e Psi(H_e) + k_e/2 sum_alpha |h_alpha|^2`.
 /// Its gradient with respect to `u` is exactly the internal force of eq. (4).
 pub fn strain_energy(d: &Discretisation, u: &[[f64; 3]]) -> f64 {

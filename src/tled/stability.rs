@@ -44,50 +44,61 @@ pub fn element_estimates(p: &Problem) -> Vec<f64> {
 /// plus the hourglass term, with `H = sum_a v_a (x) D_a`. (At rest the neo-Hookean
 /// tangent is the isotropic linear-elastic one with `lambda = K - 2 mu / 3`.)
 pub fn linear_stiffness_times(d: &Discretisation, v: &[f64], out: &mut [f64]) {
-    let blocks: Vec<[[f64; 3]; 8]> = (0..d.num_elements())
-        .into_par_iter()
-        .map(|e| {
-            let conn = &d.conn[e];
-            let ve: [[f64; 3]; 8] = std::array::from_fn(|a| {
-                let n = conn[a] as usize;
-                [v[3 * n], v[3 * n + 1], v[3 * n + 2]]
-            });
-            let mut h = [[0.0; 3]; 3];
-            for a in 0..8 {
-                for i in 0..3 {
-                    for j in 0..3 {
-                        h[i][j] += ve[a][i] * d.dhdx[e][a][j];
-                    }
-                }
-            }
-            let lambda = d.bulk[e] - 2.0 * d.mu[e] / 3.0;
-            let tr = h[0][0] + h[1][1] + h[2][2];
-            let mut s = [[0.0; 3]; 3];
+    let mut blocks = Vec::new();
+    linear_stiffness_times_with(d, v, out, &mut blocks);
+}
+
+/// [`linear_stiffness_times`] with the per-element force blocks in a buffer the caller keeps
+/// between calls (the Lanczos iteration calls it about 50 times).
+fn linear_stiffness_times_with(
+    d: &Discretisation,
+    v: &[f64],
+    out: &mut [f64],
+    blocks: &mut Vec<[[f64; 3]; 8]>,
+) {
+    blocks.resize(d.num_elements(), [[0.0; 3]; 8]);
+    blocks.par_iter_mut().enumerate().for_each(|(e, block)| {
+        let conn = &d.conn[e];
+        let ve: [[f64; 3]; 8] = std::array::from_fn(|a| {
+            let n = conn[a] as usize;
+            [v[3 * n], v[3 * n + 1], v[3 * n + 2]]
+        });
+        let mut h = [[0.0; 3]; 3];
+        for a in 0..8 {
             for i in 0..3 {
                 for j in 0..3 {
-                    s[i][j] = d.weight[e]
-                        * (d.mu[e] * (h[i][j] + h[j][i]) + if i == j { lambda * tr } else { 0.0 });
+                    h[i][j] += ve[a][i] * d.dhdx[e][a][j];
                 }
             }
-            let mut hg = [[0.0; 3]; 4];
-            for b in 0..8 {
-                for alpha in 0..4 {
-                    for i in 0..3 {
-                        hg[alpha][i] += d.gamma[e][b][alpha] * ve[b][i];
-                    }
-                }
+        }
+        let lambda = d.bulk[e] - 2.0 * d.mu[e] / 3.0;
+        let tr = h[0][0] + h[1][1] + h[2][2];
+        let mut s = [[0.0; 3]; 3];
+        for i in 0..3 {
+            for j in 0..3 {
+                s[i][j] = d.weight[e]
+                    * (d.mu[e] * (h[i][j] + h[j][i]) + if i == j { lambda * tr } else { 0.0 });
             }
-            let mut f = [[0.0; 3]; 8];
-            for a in 0..8 {
+        }
+        let mut hg = [[0.0; 3]; 4];
+        for b in 0..8 {
+            for alpha in 0..4 {
                 for i in 0..3 {
-                    let el: f64 = (0..3).map(|j| s[i][j] * d.dhdx[e][a][j]).sum();
-                    let hgf: f64 = (0..4).map(|al| d.gamma[e][a][al] * hg[al][i]).sum();
-                    f[a][i] = el + d.hg_k[e] * hgf;
+                    hg[alpha][i] += d.gamma[e][b][alpha] * ve[b][i];
                 }
             }
-            f
-        })
-        .collect();
+        }
+        let mut f = [[0.0; 3]; 8];
+        for a in 0..8 {
+            for i in 0..3 {
+                let el: f64 = (0..3).map(|j| s[i][j] * d.dhdx[e][a][j]).sum();
+                let hgf: f64 = (0..4).map(|al| d.gamma[e][a][al] * hg[al][i]).sum();
+                f[a][i] = el + d.hg_k[e] * hgf;
+            }
+        }
+        *block = f;
+    });
+    let blocks = &blocks[..];
     out.par_chunks_mut(3).enumerate().for_each(|(n, o)| {
         let mut f = [0.0; 3];
         for &s in d.gather.of(n) {
@@ -107,11 +118,13 @@ pub fn largest_eigenvalue(d: &Discretisation, max_iter: usize, tol: f64) -> (f64
     let n = 3 * d.num_nodes;
     let free: Vec<bool> = d.constraints.constrained.iter().map(|c| !c).collect();
     let inv_sqrt_m: Vec<f64> = (0..n).map(|k| 1.0 / d.mass[k / 3].sqrt()).collect();
-    let op = |x: &[f64], y: &mut [f64]| {
-        let xs: Vec<f64> = (0..n)
-            .map(|k| if free[k] { x[k] * inv_sqrt_m[k] } else { 0.0 })
-            .collect();
-        linear_stiffness_times(d, &xs, y);
+    let mut xs = vec![0.0; n];
+    let mut blocks = Vec::new();
+    let mut op = |x: &[f64], y: &mut [f64]| {
+        for k in 0..n {
+            xs[k] = if free[k] { x[k] * inv_sqrt_m[k] } else { 0.0 };
+        }
+        linear_stiffness_times_with(d, &xs, y, &mut blocks);
         for k in 0..n {
             y[k] = if free[k] { y[k] * inv_sqrt_m[k] } else { 0.0 };
         }

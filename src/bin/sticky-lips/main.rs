@@ -623,15 +623,21 @@ fn blend(input: &InputArgs, shapes: &[String], out: &Path) -> sticky_lips::Resul
         &p.mesh.nodes,
         &p.mesh.elements,
         &p.element_material,
+        &[],
     )?;
-    w.frame(0.0, &u, &disc, None)?;
+    w.frame(sticky_lips::io::output::Frame {
+        time: 0.0,
+        u: u.clone(),
+        volume_ratio: sticky_lips::tled::solver::volume_ratios(&disc, &u),
+        saliva: None,
+    })?;
     let summary = serde_json::json!({
         "input": p.source, "kind": "blend", "shapes": shapes, "steps": 0, "simulated_time": 0.0,
         "wall_time": 0.0, "element_updates_per_second": 0.0, "precision": "f64", "threads": 1,
         "critical_time_step": stability::analyse(&p, &disc).critical_time_step, "frames": 1,
         "energy": {"time": [0.0], "kinetic": [0.0], "strain": [sticky_lips::tled::solver::strain_energy(&disc, &u)]},
     });
-    w.finish(&disc, &summary)?;
+    w.finish(&summary)?;
     println!(
         "blend of {} shape(s) written to {}",
         shapes.len(),
