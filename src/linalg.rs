@@ -10,12 +10,6 @@ pub type Vec3<T> = [T; 3];
 pub type Mat3<T> = [[T; 3]; 3];
 
 #[inline(always)]
-pub fn identity<T: Real>() -> Mat3<T> {
-    let (o, z) = (T::ONE, T::ZERO);
-    [[o, z, z], [z, o, z], [z, z, o]]
-}
-
-#[inline(always)]
 pub fn det<T: Real>(m: &Mat3<T>) -> T {
     m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
         - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
@@ -64,18 +58,6 @@ pub fn mul<T: Real>(a: &Mat3<T>, b: &Mat3<T>) -> Mat3<T> {
     for i in 0..3 {
         for j in 0..3 {
             r[i][j] = a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j];
-        }
-    }
-    r
-}
-
-/// `a^T b`.
-#[inline(always)]
-pub fn tmul<T: Real>(a: &Mat3<T>, b: &Mat3<T>) -> Mat3<T> {
-    let mut r = [[T::ZERO; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            r[i][j] = a[0][i] * b[0][j] + a[1][i] * b[1][j] + a[2][i] * b[2][j];
         }
     }
     r

@@ -1,4 +1,4 @@
-//! The patch test (paper eq. 4 with the two gradient variants, NOTES section 1): a homogeneous
+//! The patch test (paper eq. 4 with the two gradient variants of `element::hex8::GradientVariant`): a homogeneous
 //! deformation of a distorted 3x3x3 patch is an exact solution of the discrete equations with
 //! the mean-gradient element, and is not with the paper's literal centroid element.
 #![allow(clippy::needless_range_loop)] // index loops mirror the tensor notation
@@ -96,7 +96,7 @@ fn patch_test_forces() {
             mg32 < 1e-5,
             "seed {seed}: mean-gradient f32 patch residual {mg32:e}"
         );
-        // the centroid element is known to fail the patch test on non-parallelepipeds (NOTES: ~1e-2);
+        // the centroid element fails the patch test on non-parallelepipeds (residual ~1e-2 here);
         // 1e-4 is 8 orders above round-off and two below the expected failure
         assert!(
             c64 > 1e-4,

@@ -199,17 +199,22 @@ pub fn hourglass_stiffness(kappa: f64, volume: f64, mu: f64, bulk: f64, d: &[[f6
     kappa * volume * (lambda + 2.0 * mu) * sum_sq / 8.0
 }
 
+/// The six faces of a `VTK_HEXAHEDRON` (nodes 0-3 the bottom, counter-clockwise seen
+/// from above; 4-7 the top), each listed counter-clockwise seen from outside, so that the
+/// right-hand normal points out of a positively oriented element: bottom, top, then the
+/// sides `y-`, `x+`, `y+`, `x-` of the reference cube.
+pub const FACES: [[usize; 4]; 6] = [
+    [0, 3, 2, 1],
+    [4, 5, 6, 7],
+    [0, 1, 5, 4],
+    [1, 2, 6, 5],
+    [2, 3, 7, 6],
+    [3, 0, 4, 7],
+];
+
 /// A stable-time-step length scale of the element: its volume over its largest face
 /// area (the usual estimate for hexahedra, e.g. Hallquist's LS-DYNA theory manual).
 pub fn characteristic_length(x: &[[f64; 3]; 8]) -> f64 {
-    const FACES: [[usize; 4]; 6] = [
-        [0, 3, 2, 1],
-        [4, 5, 6, 7],
-        [0, 1, 5, 4],
-        [1, 2, 6, 5],
-        [2, 3, 7, 6],
-        [3, 0, 4, 7],
-    ];
     let mut amax: f64 = 0.0;
     for f in FACES {
         let p = |k: usize| x[f[k]];

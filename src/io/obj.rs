@@ -69,13 +69,6 @@ impl QuadSurface {
         self.groups.iter().position(|g| g == name)
     }
 
-    /// The quads of group `g`, in order.
-    pub fn quads_of_group(&self, g: usize) -> Vec<u32> {
-        (0..self.quads.len() as u32)
-            .filter(|&q| self.group_of_quad[q as usize] as usize == g)
-            .collect()
-    }
-
     /// Consistency of the arrays (for surfaces built in code): lengths, index ranges,
     /// finite coordinates.
     pub fn validate(&self, file: &str) -> Result<()> {

@@ -339,18 +339,6 @@ pub fn read(path: &Path) -> Result<Scenario> {
     parse(&text, path)
 }
 
-/// Reads a scenario with some values replaced first: each override is a dotted key path
-/// (`"mesh.mouth.resolution"`, `"time.total"`) and its new value; missing tables are
-/// created. Used for the coarse (`--quick`) versions of the paper's scenarios and for sweeps.
-pub fn read_with_overrides(path: &Path, overrides: &[(&str, toml::Value)]) -> Result<Scenario> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    if overrides.is_empty() {
-        return parse(&text, path);
-    }
-    let text = with_overrides(&text, &path.display().to_string(), overrides)?;
-    parse(&text, path)
-}
-
 /// The scenario text `text` (named `file` in errors) with some values replaced: each
 /// override is a dotted key path (`"mesh.face.resolution"`, `"saliva.0.k_glue"`) and its
 /// new value; missing tables are created. Returns the new TOML text (comments are lost).

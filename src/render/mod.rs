@@ -38,7 +38,7 @@ pub use raster::{
 };
 pub use surface::{
     boundary_quads, boundary_quads_where, corner_normals, face_centroid, face_normal,
-    vertex_normals, BoundaryFace, HEX_FACES,
+    vertex_normals, BoundaryFace,
 };
 pub use text::{text_size, FONT_BYTES};
 

@@ -2,23 +2,11 @@
 //! exactly one hexahedron, oriented outward, and normals for smooth shading.
 
 use super::raster::{add, cross, dot, normalize, scale, sub};
+use crate::element::hex8::FACES as HEX_FACES;
 use std::collections::HashMap;
 
-/// The six faces of a `VTK_HEXAHEDRON` (nodes 0-3 the bottom, counter-clockwise seen
-/// from above; 4-7 the top), each listed counter-clockwise seen from outside, so that the
-/// right-hand normal points out of a positively oriented element: bottom, top, then the
-/// sides `y-`, `x+`, `y+`, `x-` of the reference cube.
-pub const HEX_FACES: [[usize; 4]; 6] = [
-    [0, 3, 2, 1],
-    [4, 5, 6, 7],
-    [0, 1, 5, 4],
-    [1, 2, 6, 5],
-    [2, 3, 7, 6],
-    [3, 0, 4, 7],
-];
-
 /// A boundary quadrilateral: its nodes counter-clockwise seen from outside the mesh, the
-/// element it belongs to, and which face of that element it is (index into [`HEX_FACES`]).
+/// element it belongs to, and which face of that element it is (index into [`crate::element::hex8::FACES`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct BoundaryFace {
     pub nodes: [u32; 4],
@@ -27,7 +15,7 @@ pub struct BoundaryFace {
 }
 
 /// The faces of `elements` that belong to exactly one of them, in element order and
-/// then [`HEX_FACES`] order (deterministic). Orientation is outward for positively
+/// then [`crate::element::hex8::FACES`] order (deterministic). Orientation is outward for positively
 /// oriented elements (positive Jacobian, as `Mesh::validate` requires).
 pub fn boundary_quads(elements: &[[u32; 8]]) -> Vec<BoundaryFace> {
     boundary_quads_where(elements, |_| true)

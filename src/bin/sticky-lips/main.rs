@@ -1,10 +1,6 @@
-//! `sticky-lips`: the command line.
-//!
-//! ```text
-//! sticky-lips run <scenario.toml | model.xml> --out DIR [--precision f64|f32] [--backend cpu|gpu|auto] [--threads N] [--niftysim-compat]
-//! sticky-lips equilibrium <scenario.toml | model.xml> --out DIR
-//! sticky-lips check <scenario.toml | model.xml>
-//! ```
+//! `sticky-lips`: the command line. One subcommand per variant of `Command` below (run,
+//! equilibrium, check, evaporation, mouth, face, extrude, paper, blend); `sticky-lips help
+//! COMMAND` prints each one's options, and README.md shows them in use.
 
 mod paper;
 

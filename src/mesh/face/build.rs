@@ -286,14 +286,6 @@ impl FaceModel {
         u.extend(t.iter().copied());
         Some(u)
     }
-
-    /// Texture coordinates of every node (both layers: the skin's).
-    pub fn node_uv(&self) -> Option<Vec<[f64; 2]>> {
-        let uv = self.surface.uv.as_ref()?;
-        let mut out = uv.clone();
-        out.extend(uv.iter().copied());
-        Some(out)
-    }
 }
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
