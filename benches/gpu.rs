@@ -33,7 +33,7 @@ use sticky_lips::gpu::shaders::ShaderReal;
 use sticky_lips::gpu::sim::Stage;
 use sticky_lips::gpu::{GpuContext, GpuSimulation};
 use sticky_lips::tled::Simulation;
-use sticky_lips::{Problem, Real};
+use sticky_lips::Problem;
 
 mod common;
 
@@ -87,7 +87,12 @@ fn mouth_problem() -> Problem {
     p
 }
 
-fn bench_cpu<T: Real>(c: &mut Criterion, p: &Problem, label: &str, seeded: bool) {
+fn bench_cpu<T: sticky_lips::tled::simd::SimdReal>(
+    c: &mut Criterion,
+    p: &Problem,
+    label: &str,
+    seeded: bool,
+) {
     let mut sim = Simulation::<T>::new(p).expect("valid bench problem");
     if seeded {
         let u0 = common::seed_displacement(p);

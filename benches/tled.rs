@@ -37,8 +37,9 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 use sticky_lips::tled::element_forces::{element_forces, ElementArrays};
 use sticky_lips::tled::node_update::{node_update, CentralDifference};
+use sticky_lips::tled::simd::SimdReal;
 use sticky_lips::tled::Simulation;
-use sticky_lips::{Problem, Real};
+use sticky_lips::Problem;
 
 mod common;
 use common::RAMP_TIME;
@@ -89,7 +90,7 @@ fn block_problem(c: usize) -> Problem {
 
 /// Everything one (size, precision) pair needs: a running simulation in a deformed state,
 /// and the inputs of the two stages taken from it.
-struct Fixture<T: Real> {
+struct Fixture<T: SimdReal> {
     sim: Simulation<T>,
     el: ElementArrays<T>,
     cd: CentralDifference<T>,
@@ -99,7 +100,7 @@ struct Fixture<T: Real> {
     elem_f: Vec<[[T; 3]; 8]>,
 }
 
-impl<T: Real> Fixture<T> {
+impl<T: SimdReal> Fixture<T> {
     fn new(p: &Problem) -> Self {
         let mut sim = Simulation::<T>::new(p).expect("bench problem is valid");
         let u0 = common::seed_displacement(p);
@@ -175,7 +176,7 @@ fn timed_in(pool: &ThreadPool, iters: u64, mut f: impl FnMut() + Send) -> Durati
     })
 }
 
-fn bench_precision<T: Real>(c: &mut Criterion, p: &Problem, pools: &[(usize, ThreadPool)]) {
+fn bench_precision<T: SimdReal>(c: &mut Criterion, p: &Problem, pools: &[(usize, ThreadPool)]) {
     let ne = p.mesh.elements.len();
     // Built on first use, so that benchmarks excluded by a filter cost nothing.
     let mut fixture: Option<Fixture<T>> = None;
@@ -241,7 +242,7 @@ fn bench_precision<T: Real>(c: &mut Criterion, p: &Problem, pools: &[(usize, Thr
 /// The paper's scene: the procedural mouth's `fig4_sticky` run (`sticky_lips::paper`, Table 1 on the procedural mouth) (the mouth at paper resolution,
 /// saliva with the breaking rule, jaw rotation; Table 1's dt), advanced `MOUTH_SEED_STEPS`
 /// from rest first so that the jaw has started to turn and every element is deformed.
-fn bench_mouth<T: Real>(c: &mut Criterion, pools: &[(usize, ThreadPool)]) {
+fn bench_mouth<T: SimdReal>(c: &mut Criterion, pools: &[(usize, ThreadPool)]) {
     const MOUTH_SEED_STEPS: usize = 2000;
     let p = common::mouth_problem(1.0);
     let ne = p.mesh.elements.len();

@@ -146,7 +146,7 @@ fn saliva_frame_of<T: Real>(s: &crate::tled::saliva_forces::SalivaState<T>) -> S
     }
 }
 
-impl<T: Real> Stepper for Simulation<T> {
+impl<T: crate::tled::simd::SimdReal> Stepper for Simulation<T> {
     fn disc(&self) -> &crate::tled::precompute::Discretisation {
         &self.disc
     }

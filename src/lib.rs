@@ -21,6 +21,7 @@ pub mod error;
 #[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod io;
+pub mod lanes;
 pub mod linalg;
 pub mod material;
 pub mod measures;

@@ -231,7 +231,7 @@ pub fn all(model: Model, quick: bool) -> Vec<Spec> {
 /// `study_`; the first run of the list is the reference (`fig4_sticky`, not repeated).
 pub fn study(quick: bool) -> Vec<Spec> {
     let f = Value::Float;
-    let dt = 1e-5; // Table 1's
+    let dt = crate::problem::table1::TIME_STEP;
     let per_step = |tau: f64| f((-dt / tau).exp());
     let gradient = |centre: f64| {
         // moisture falling in equal steps from 100 (critical: the strongest glue) at
@@ -346,4 +346,39 @@ pub fn scenario_of(
 /// The run called `name` of [`all`].
 pub fn spec(model: Model, quick: bool, name: &str) -> Option<Spec> {
     all(model, quick).into_iter().find(|s| s.name == name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::saliva::{Decay, EvaporationSchedule};
+    use crate::problem::table1;
+
+    /// `paper/scenarios/table1.toml` says what `problem::table1` says: the base scenario of
+    /// the figures cannot drift from Table 1 as the code defines it.
+    #[test]
+    fn table1_toml_is_table_1() {
+        let p = scenario::parse(TABLE1, std::path::Path::new(TABLE1_NAME))
+            .unwrap()
+            .problem;
+        let by_name = |n: &str| p.materials.iter().find(|m| m.name == n).unwrap();
+        for (name, t) in [("tissue", table1::TISSUE), ("saliva", table1::SALIVA)] {
+            assert_eq!(by_name(name), &t.spec(name), "{name}");
+        }
+        assert_eq!(p.time.dt, table1::TIME_STEP);
+        assert_eq!(p.time.total_time, table1::TOTAL_TIME);
+        assert_eq!(p.numerics.damping, table1::DAMPING);
+        assert_eq!(p.numerics.hourglass_kappa, table1::HOURGLASS_KAPPA);
+        let s = &p.physics.saliva[0].params;
+        assert_eq!(s.critical_moisture, table1::CRITICAL_MOISTURE);
+        assert_eq!(s.decay, Decay::PerStep(table1::DECAY_PER_STEP));
+        assert_eq!(
+            s.evaporation,
+            EvaporationSchedule::constant(table1::EVAPORATION_RATE)
+        );
+        assert_eq!(
+            s.initial_moisture,
+            crate::material::saliva::MoistureMap::Constant(table1::INITIAL_MOISTURE)
+        );
+    }
 }

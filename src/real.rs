@@ -29,7 +29,6 @@ pub trait Real:
     + AddAssign
     + SubAssign
     + MulAssign
-    + crate::tled::simd::LaneKernel
 {
     /// `"f32"` or `"f64"`.
     const NAME: &'static str;
@@ -212,7 +211,7 @@ pub(crate) fn cbrt_special(x: f64) -> f64 {
 /// Cube root of every lane (each lane as [`cbrt_f64`]).
 #[inline(always)]
 pub fn cbrt_f64_lanes<const L: usize>(x: [f64; L]) -> [f64; L] {
-    use crate::tled::simd::V;
+    use crate::lanes::V;
     let (mut a, mut w0, mut s) = ([1.0; L], [1.0; L], [1.0; L]);
     let mut all_normal = true;
     for l in 0..L {

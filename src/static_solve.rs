@@ -29,8 +29,8 @@
 
 use crate::error::{Error, Result};
 use crate::material::neo_hookean::{material_tangent, pk2_stress};
+use crate::problem::boundary::PrescribedRotation;
 use crate::problem::Problem;
-use crate::tled::boundary::PrescribedRotation;
 use crate::tled::element_forces::{element_forces, ElementArrays};
 use crate::tled::node_update::gather_all;
 use crate::tled::precompute::Discretisation;
@@ -574,10 +574,10 @@ mod tests {
     use crate::material::NeoHookean;
     use crate::mesh::generate::{block, distorted_block, SplitMix64};
     use crate::mesh::Mesh;
-    use crate::problem::{MaterialSpec, Numerics, TimeSettings};
-    use crate::tled::boundary::{
+    use crate::problem::boundary::{
         BoundaryConditions, Fixed, LoadCurve, LoadShape, NodalForce, PrescribedDisplacement,
     };
+    use crate::problem::{MaterialSpec, Numerics, TimeSettings};
     use crate::tled::element_forces::element_force;
 
     const MU: f64 = 1000.0;

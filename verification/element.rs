@@ -9,8 +9,8 @@ use sticky_lips::material::neo_hookean::{material_tangent, pk2_stress, strain_en
 use sticky_lips::material::NeoHookean;
 use sticky_lips::mesh::generate::{distorted_block, SplitMix64};
 use sticky_lips::mesh::Mesh;
+use sticky_lips::problem::boundary::BoundaryConditions;
 use sticky_lips::problem::{MaterialSpec, Numerics, Problem, TimeSettings};
-use sticky_lips::tled::boundary::BoundaryConditions;
 use sticky_lips::tled::element_forces::element_force;
 use sticky_lips::tled::precompute::Discretisation;
 use sticky_lips::tled::solver::element_energy;

@@ -7,14 +7,14 @@ use sticky_lips::blend::blend;
 use sticky_lips::element::hex8::GradientVariant;
 use sticky_lips::mesh::generate::{distorted_block, SplitMix64};
 use sticky_lips::muscle::Muscle;
-use sticky_lips::problem::{Problem, TimeSettings};
-use sticky_lips::static_solve::{solve_equilibrium, StaticOptions};
-use sticky_lips::tled::boundary::{
+use sticky_lips::problem::boundary::{
     BoundaryConditions, Fixed, LoadCurve, LoadShape, PrescribedDisplacement, PrescribedRotation,
 };
+use sticky_lips::problem::{Problem, TimeSettings};
+use sticky_lips::static_solve::{solve_equilibrium, StaticOptions};
 use sticky_lips::tled::precompute::Discretisation;
+use sticky_lips::tled::simd::SimdReal;
 use sticky_lips::tled::solver::{displacement_gradient, Simulation};
-use sticky_lips::Real;
 
 type V3 = [f64; 3];
 
@@ -240,7 +240,7 @@ fn muscle_force_total_is_activation_times_strength() {
     }
 }
 
-fn passive_vs_zero_activation<T: Real>() {
+fn passive_vs_zero_activation<T: SimdReal>() {
     // a pull on the far face (prescribed x displacement, POLY345) and damping: a non-trivial run
     let face = |p: &Problem| p.mesh.node_sets["x_max"].clone();
     let bc = |nodes: Vec<u32>| BoundaryConditions {

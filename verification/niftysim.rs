@@ -5,9 +5,9 @@ use crate::common::*;
 use sticky_lips::element::hex8::GradientVariant;
 use sticky_lips::io::niftysim;
 use sticky_lips::material::neo_hookean::{pk2_stress, two_green_strain};
+use sticky_lips::tled::simd::SimdReal;
 use sticky_lips::tled::solver::displacement_gradient;
 use sticky_lips::tled::Simulation;
-use sticky_lips::Real;
 
 const MODELS: [&str; 5] = [
     "hex1_stretch",
@@ -17,7 +17,7 @@ const MODELS: [&str; 5] = [
     "cantilever_tipdisp",
 ];
 
-fn run_model<T: Real>(name: &str) -> (Simulation<T>, Vec<[f64; 3]>) {
+fn run_model<T: SimdReal>(name: &str) -> (Simulation<T>, Vec<[f64; 3]>) {
     let p = niftysim::read(
         &oracle_dir().join(format!("{name}.xml")),
         GradientVariant::Centroid,
@@ -119,7 +119,7 @@ fn niftysim_f64_masses_volumes_gradients_stress() {
 // the single-precision runs.
 
 /// Internal forces of `name`'s mesh at NiftySim's random displacement field `MODEL_Urand.txt`.
-fn urand_forces<T: Real>(name: &str) -> (Simulation<T>, Vec<[f64; 3]>, Vec<[f64; 3]>) {
+fn urand_forces<T: SimdReal>(name: &str) -> (Simulation<T>, Vec<[f64; 3]>, Vec<[f64; 3]>) {
     let p = niftysim::read(
         &oracle_dir().join(format!("{name}.xml")),
         GradientVariant::Centroid,

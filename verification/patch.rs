@@ -8,15 +8,15 @@ use sticky_lips::element::hex8::GradientVariant;
 use sticky_lips::material::neo_hookean::pk2_stress;
 use sticky_lips::mesh::generate::distorted_block;
 use sticky_lips::mesh::Mesh;
-use sticky_lips::problem::TimeSettings;
-use sticky_lips::static_solve::{solve_equilibrium, StaticOptions};
-use sticky_lips::tled::boundary::{
+use sticky_lips::problem::boundary::{
     BoundaryConditions, LoadCurve, LoadShape, PrescribedDisplacement,
 };
+use sticky_lips::problem::TimeSettings;
+use sticky_lips::static_solve::{solve_equilibrium, StaticOptions};
 use sticky_lips::tled::element_forces::{element_forces, ElementArrays};
 use sticky_lips::tled::node_update::gather_all;
 use sticky_lips::tled::precompute::Discretisation;
-use sticky_lips::Real;
+use sticky_lips::tled::simd::SimdReal;
 
 /// A general deformation gradient with det F0 > 0 (no symmetry, ~10-20 % strains).
 pub const F0: [[f64; 3]; 3] = [[1.12, 0.17, -0.06], [0.04, 0.91, 0.11], [-0.09, 0.13, 1.05]];
@@ -42,7 +42,7 @@ pub fn homogeneous(mesh: &Mesh, f0: &[[f64; 3]; 3]) -> Vec<[f64; 3]> {
 }
 
 /// Assembled internal nodal forces in precision `T`, through the library's stepping kernels.
-pub fn internal_forces<T: Real>(d: &Discretisation, u: &[[f64; 3]]) -> Vec<[f64; 3]> {
+pub fn internal_forces<T: SimdReal>(d: &Discretisation, u: &[[f64; 3]]) -> Vec<[f64; 3]> {
     let el = ElementArrays::<T>::from_discretisation(d);
     let ut: Vec<[T; 3]> = u.iter().map(|v| v.map(T::from_f64)).collect();
     let mut blocks = vec![[[T::ZERO; 3]; 8]; d.num_elements()];
@@ -64,7 +64,7 @@ fn traction_scale(f0: &[[f64; 3]; 3]) -> f64 {
 }
 
 /// Max interior-node residual force relative to the traction scale.
-fn interior_residual<T: Real>(variant: GradientVariant, seed: u64) -> f64 {
+fn interior_residual<T: SimdReal>(variant: GradientVariant, seed: u64) -> f64 {
     let mesh = patch(seed);
     let d = Discretisation::new(&crate::element::bare_problem(mesh.clone(), variant));
     let f = internal_forces::<T>(&d, &homogeneous(&mesh, &F0));

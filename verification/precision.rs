@@ -4,13 +4,13 @@
 use crate::element::{bare_problem, force_of, problem};
 use sticky_lips::element::hex8::GradientVariant;
 use sticky_lips::mesh::generate::{block, SplitMix64};
-use sticky_lips::problem::{Problem, TimeSettings};
-use sticky_lips::tled::boundary::{
+use sticky_lips::problem::boundary::{
     BoundaryConditions, Fixed, LoadCurve, LoadShape, NodalForce, PrescribedDisplacement,
 };
+use sticky_lips::problem::{Problem, TimeSettings};
 use sticky_lips::tled::precompute::Discretisation;
+use sticky_lips::tled::simd::SimdReal;
 use sticky_lips::tled::Simulation;
-use sticky_lips::Real;
 
 /// One 10 mm hexahedron, x = 0 face fixed, x = max face pulled to `value` in x (STEP).
 fn single_element(value: f64) -> Problem {
@@ -45,7 +45,7 @@ fn single_element(value: f64) -> Problem {
     )
 }
 
-fn run_steps<T: Real>(p: &Problem, steps: usize) -> Vec<[T; 3]> {
+fn run_steps<T: SimdReal>(p: &Problem, steps: usize) -> Vec<[T; 3]> {
     let mut sim = Simulation::<T>::new(p).unwrap();
     for _ in 0..steps {
         sim.step().unwrap();
@@ -184,7 +184,7 @@ fn threaded_problem() -> Problem {
     )
 }
 
-fn run_in_pool<T: Real>(p: &Problem, threads: usize) -> Vec<u64> {
+fn run_in_pool<T: SimdReal>(p: &Problem, threads: usize) -> Vec<u64> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -237,7 +237,7 @@ fn identical_bits_on_any_thread_count() {
 }
 
 /// Bits of every force component.
-fn force_bits<T: Real>(f: &[[[T; 3]; 8]]) -> Vec<u64> {
+fn force_bits<T: SimdReal>(f: &[[[T; 3]; 8]]) -> Vec<u64> {
     f.iter()
         .flatten()
         .flatten()
@@ -249,7 +249,7 @@ fn force_bits<T: Real>(f: &[[[T; 3]; 8]]) -> Vec<u64> {
 /// scalar reference `element_force`, along a whole run of a distorted block (both gradient
 /// variants, f64 and f32): at every 10th step the forces of the dispatched copy (AVX2 where
 /// the processor has it) and of the portable copy equal the reference bit for bit.
-fn lane_kernel_matches_reference_along_a_run<T: Real>(variant: GradientVariant) {
+fn lane_kernel_matches_reference_along_a_run<T: SimdReal>(variant: GradientVariant) {
     use sticky_lips::mesh::generate::distorted_block;
     use sticky_lips::tled::element_forces::{
         element_forces, element_forces_portable, element_forces_scalar, ElementArrays,

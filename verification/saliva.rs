@@ -13,14 +13,14 @@ use sticky_lips::material::saliva::{
 use sticky_lips::material::NeoHookean;
 use sticky_lips::mesh::generate::{block, SplitMix64};
 use sticky_lips::mesh::Mesh;
-use sticky_lips::problem::{MaterialSpec, Numerics, Physics, Problem, SalivaSet, TimeSettings};
-use sticky_lips::tled::boundary::{
+use sticky_lips::problem::boundary::{
     BoundaryConditions, Fixed, LoadCurve, LoadShape, PrescribedDisplacement,
 };
+use sticky_lips::problem::{MaterialSpec, Numerics, Physics, Problem, SalivaSet, TimeSettings};
 use sticky_lips::tled::element_forces::element_force;
 use sticky_lips::tled::precompute::Discretisation;
+use sticky_lips::tled::simd::SimdReal;
 use sticky_lips::tled::solver::Simulation;
-use sticky_lips::Real;
 
 // ---------------------------------------------------------------------------------------
 // Eq. (5): Herz-Knudsen
@@ -289,7 +289,7 @@ fn random_rotation(rng: &mut SplitMix64) -> M3 {
     ]
 }
 
-fn q_in<T: Real>(h: &M3, y: &[f64; 3]) -> f64 {
+fn q_in<T: SimdReal>(h: &M3, y: &[f64; 3]) -> f64 {
     stretch_across::<T>(&h.map(|r| r.map(T::from_f64)), &y.map(T::from_f64)).to_f64()
 }
 
@@ -606,7 +606,7 @@ fn q_pred(s: usize) -> f64 {
 }
 
 /// The unmodified TLED force of element `e` at displacement `u`, computed as the solver does.
-fn fresh_force<T: Real>(d: &Discretisation, u: &[[T; 3]], e: usize) -> [[T; 3]; 8] {
+fn fresh_force<T: SimdReal>(d: &Discretisation, u: &[[T; 3]], e: usize) -> [[T; 3]; 8] {
     let c3 = |g: &[[f64; 3]; 8]| g.map(|r| r.map(T::from_f64));
     let c4 = |g: &[[f64; 4]; 8]| g.map(|r| r.map(T::from_f64));
     let ue: [[T; 3]; 8] = std::array::from_fn(|a| u[d.conn[e][a] as usize]);
@@ -622,16 +622,16 @@ fn fresh_force<T: Real>(d: &Discretisation, u: &[[T; 3]], e: usize) -> [[T; 3]; 
     .0
 }
 
-fn bits<T: Real>(f: &[[T; 3]; 8]) -> Vec<u64> {
+fn bits<T: SimdReal>(f: &[[T; 3]; 8]) -> Vec<u64> {
     f.iter().flatten().map(|v| v.to_f64().to_bits()).collect()
 }
-fn max_abs<T: Real>(f: &[[T; 3]; 8]) -> f64 {
+fn max_abs<T: SimdReal>(f: &[[T; 3]; 8]) -> f64 {
     f.iter()
         .flatten()
         .fold(0.0f64, |m, v| m.max(v.to_f64().abs()))
 }
 /// Sum of the y forces on the element's top nodes (local nodes 2, 3, 6, 7: eta = +1).
-fn top_force_y<T: Real>(f: &[[T; 3]; 8]) -> f64 {
+fn top_force_y<T: SimdReal>(f: &[[T; 3]; 8]) -> f64 {
     [2, 3, 6, 7].iter().map(|&a| f[a][1].to_f64()).sum()
 }
 
@@ -648,7 +648,7 @@ struct Trace {
 /// `intact(s)`, the prediction of whether the element holds at step `s`: when it holds, the
 /// force block is bit-identical to the unmodified TLED force recomputed from `u_s`; when it
 /// does not, it is bit-identical to `decay * F_{s-1}`.
-fn run_rule<T: Real>(params: SalivaParams, intact: impl Fn(usize) -> bool) -> Trace {
+fn run_rule<T: SimdReal>(params: SalivaParams, intact: impl Fn(usize) -> bool) -> Trace {
     let factor = params.decay.factor(DT1);
     let rule = params.rule;
     let p = one_element_problem(params);
@@ -717,7 +717,7 @@ fn force_rule_eq11_literal_and_latched_f32() {
     force_rule_eq11::<f32>();
 }
 
-fn force_rule_eq11<T: Real>() {
+fn force_rule_eq11<T: SimdReal>() {
     // the prediction must not sit on a step boundary (Q - Z and Q - 1 are >= 1e-3 at every step)
     for s in 0..STEPS1 {
         assert!((q_pred(s) - Z_MOIST).abs() > 1e-3 && ((q_pred(s) - 1.0).abs() > 1e-3 || s == 0));
@@ -1080,7 +1080,7 @@ struct SlabRun {
     force_at_end: f64,
 }
 
-fn run_slabs<T: Real>(rollers: bool, moisture: f64) -> SlabRun {
+fn run_slabs<T: SimdReal>(rollers: bool, moisture: f64) -> SlabRun {
     let probe = slabs(rollers, moisture, K_GLUE, PULL, RAMP, TOTAL, 1e-5);
     let report =
         sticky_lips::tled::stability::analyse(&probe.problem, &Discretisation::new(&probe.problem));
@@ -1257,7 +1257,7 @@ fn saliva_layer_pulled_apart_free_sides() {
     check_released(&run, "free sides");
 }
 
-fn no_stickiness<T: Real>() {
+fn no_stickiness<T: SimdReal>() {
     // moisture 110 > Mc: Z = 1; every element breaks at step 0 (Q = 1 is not < 1) and never
     // carries a force: the slabs are disconnected, the upper one never moves (exactly)
     let run = run_slabs::<T>(false, 110.0);

@@ -6,11 +6,11 @@ use crate::element::problem;
 use sticky_lips::element::hex8::GradientVariant;
 use sticky_lips::mesh::generate::{block, distorted_block};
 use sticky_lips::mesh::Mesh;
-use sticky_lips::problem::{Problem, TimeSettings};
-use sticky_lips::static_solve::{solve_equilibrium, StaticOptions};
-use sticky_lips::tled::boundary::{
+use sticky_lips::problem::boundary::{
     BoundaryConditions, Fixed, LoadCurve, LoadShape, NodalForce, PrescribedDisplacement,
 };
+use sticky_lips::problem::{Problem, TimeSettings};
+use sticky_lips::static_solve::{solve_equilibrium, StaticOptions};
 use sticky_lips::tled::precompute::Discretisation;
 use sticky_lips::tled::solver::strain_energy;
 use sticky_lips::tled::stability::{analyse, check_time_step, linear_stiffness_times};

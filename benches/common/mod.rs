@@ -4,10 +4,10 @@
 use sticky_lips::element::hex8::GradientVariant;
 use sticky_lips::material::NeoHookean;
 use sticky_lips::mesh::generate::block;
-use sticky_lips::problem::{MaterialSpec, Numerics, TimeSettings};
-use sticky_lips::tled::boundary::{
+use sticky_lips::problem::boundary::{
     BoundaryConditions, Fixed, LoadCurve, LoadShape, PrescribedDisplacement,
 };
+use sticky_lips::problem::{MaterialSpec, Numerics, TimeSettings};
 use sticky_lips::tled::stability::element_estimates;
 use sticky_lips::Problem;
 

@@ -47,7 +47,6 @@ use crate::gpu::layout::*;
 use crate::gpu::shaders::{kernel_source, Kernel, ShaderReal};
 use crate::material::saliva::BreakingRule;
 use crate::problem::Problem;
-use crate::real::Real;
 use crate::tled::element_forces::{element_forces, ElementArrays};
 use crate::tled::node_update::{gather_all, CentralDifference};
 use crate::tled::precompute::Discretisation;
@@ -57,7 +56,7 @@ use std::num::NonZeroU64;
 use wgpu::util::DeviceExt;
 
 /// A stepping scalar the kernels exist for.
-pub trait GpuReal: Real + bytemuck::Pod {
+pub trait GpuReal: crate::tled::simd::SimdReal + bytemuck::Pod {
     const IS_F64: bool;
     /// The kernels' scalar on an adapter with (`has_f64`) or without SHADER_F64.
     fn shader_real(has_f64: bool) -> ShaderReal {
@@ -487,12 +486,8 @@ impl<T: GpuReal> GpuSimulation<T> {
             .flatten()
             .map(|&x| T::from_f64(x))
             .collect();
-        sal_const.extend(
-            sp.groups
-                .iter()
-                .map(|g| T::from_f64(g.decay.factor(problem.time.dt))),
-        );
-        let saliva = SalivaState::<T>::new(sp, problem.time.dt);
+        sal_const.extend(sp.decay_factor.iter().map(|&f| T::from_f64(f)));
+        let saliva = SalivaState::<T>::new(sp);
         // initial saliva state: no previous force, Q = 1, intact, never broken
         let sal_real0: Vec<T> = (0..ns)
             .flat_map(|_| {

@@ -11,10 +11,10 @@ use crate::element::hex8::GradientVariant;
 use crate::error::{Error, Location, Result};
 use crate::material::NeoHookean;
 use crate::mesh::Mesh;
-use crate::problem::{MaterialSpec, Numerics, Problem, TimeSettings};
-use crate::tled::boundary::{
+use crate::problem::boundary::{
     BoundaryConditions, Fixed, Gravity, LoadCurve, LoadShape, NodalForce, PrescribedDisplacement,
 };
+use crate::problem::{MaterialSpec, Numerics, Problem, TimeSettings};
 use roxmltree::{Document, Node};
 use std::path::Path;
 
@@ -227,7 +227,9 @@ pub fn parse(
     let dt = req("TimeStep")?;
     let total_time = req("TotalTime")?;
     let damping = cx.scalar(sp, "DampingCoeff")?.unwrap_or(0.0);
-    let kappa = cx.scalar(sp, "HGKappa")?.unwrap_or(0.075);
+    let kappa = cx
+        .scalar(sp, "HGKappa")?
+        .unwrap_or(Numerics::default().hourglass_kappa);
     let default_density = cx.scalar(sp, "Density")?;
     for (name, v) in [("TimeStep", dt), ("TotalTime", total_time)] {
         if v <= 0.0 {

@@ -10,11 +10,11 @@ use crate::error::{Error, Location, Result};
 use crate::material::NeoHookean;
 use crate::mesh::{generate, Mesh};
 use crate::muscle::Muscle;
-use crate::problem::{MaterialSpec, Numerics, Physics, Problem, SalivaSet, TimeSettings};
-use crate::tled::boundary::{
+use crate::problem::boundary::{
     BoundaryConditions, Fixed, Gravity, LoadCurve, LoadShape, NodalForce, PrescribedDisplacement,
     PrescribedRotation,
 };
+use crate::problem::{table1, MaterialSpec, Numerics, Physics, Problem, SalivaSet, TimeSettings};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -314,7 +314,7 @@ pub struct TimeDef {
 pub struct NumericsDef {
     /// Mass-proportional damping `alpha` (1/s), default 0.
     pub damping: Option<f64>,
-    /// Hourglass coefficient `kappa`, default 0.075 (Table 1).
+    /// Hourglass coefficient `kappa`, default `Numerics::default()` (Table 1's 0.075).
     pub hourglass_kappa: Option<f64>,
     /// `"mean_gradient"` (default) or `"centroid"`.
     pub variant: Option<GradientVariant>,
@@ -810,13 +810,16 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
         time: TimeSettings {
             dt: sf.time.dt,
             total_time: sf.time.total,
-            output_every: sf.time.output_every.unwrap_or(100),
+            output_every: sf.time.output_every.unwrap_or(table1::OUTPUT_EVERY),
         },
-        numerics: Numerics {
-            damping: nd.damping.unwrap_or(0.0),
-            hourglass_kappa: nd.hourglass_kappa.unwrap_or(0.075),
-            variant: nd.variant.unwrap_or_default(),
-            niftysim_timing: false,
+        numerics: {
+            let default = Numerics::default();
+            Numerics {
+                damping: nd.damping.unwrap_or(default.damping),
+                hourglass_kappa: nd.hourglass_kappa.unwrap_or(default.hourglass_kappa),
+                variant: nd.variant.unwrap_or(default.variant),
+                niftysim_timing: false,
+            }
         },
         additive_constraints: false,
         physics,
@@ -933,7 +936,7 @@ fn read_physics(
                 starts: e.starts.clone(),
                 rates: e.rates.clone(),
             },
-            (None, r) => EvaporationSchedule::constant(r.unwrap_or(0.0)),
+            (None, r) => EvaporationSchedule::constant(r.unwrap_or(table1::EVAPORATION_RATE)),
         };
         let decay = match (sd.decay_per_step, sd.decay_time) {
             (Some(_), Some(_)) => {
@@ -944,7 +947,7 @@ fn read_physics(
                 ))
             }
             (None, Some(t)) => Decay::Time(t),
-            (d, None) => Decay::PerStep(d.unwrap_or(0.99)),
+            (d, None) => Decay::PerStep(d.unwrap_or(table1::DECAY_PER_STEP)),
         };
         let across = match sd.across {
             Some(a) => Some(AcrossAxis::Uniform(unit_axis(a, &field("across"))?)),

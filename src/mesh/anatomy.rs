@@ -7,7 +7,7 @@
 use crate::material::saliva::AcrossAxis;
 use crate::measures::LipColumns;
 use crate::muscle::Muscle;
-use crate::tled::boundary::{LoadCurve, PrescribedRotation};
+use crate::problem::boundary::{LoadCurve, PrescribedRotation};
 
 #[derive(Clone, Debug)]
 pub struct MouthAnatomy {

@@ -35,7 +35,7 @@
 use super::Mesh;
 use crate::element::hex8;
 use crate::error::{Error, Location, Result};
-use crate::io::obj::QuadSurface;
+use crate::mesh::surface::QuadSurface;
 use rayon::prelude::*;
 
 /// How vertices are offset.

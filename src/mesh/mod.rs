@@ -5,6 +5,7 @@ pub mod extrude;
 pub mod face;
 pub mod generate;
 pub mod mouth;
+pub mod surface;
 
 use crate::element::hex8;
 use crate::error::{Error, Location, Result};

@@ -70,9 +70,9 @@
 use super::extrude::{extrude_with, Direction};
 use super::Mesh;
 use crate::error::{Error, Result};
-use crate::io::obj::QuadSurface;
+use crate::mesh::surface::QuadSurface;
 use crate::muscle::Muscle;
-use crate::tled::boundary::{Fixed, LoadCurve, LoadShape, PrescribedRotation};
+use crate::problem::boundary::{Fixed, LoadCurve, LoadShape, PrescribedRotation};
 use std::f64::consts::FRAC_PI_2;
 
 /// Parameters of the procedural mouth (SI metres, radians). Every field has a default
@@ -898,14 +898,12 @@ mod tests {
         assert_eq!(again.elements, m.mesh.elements);
     }
 
-    /// Table 1's time step (1e-5 s) is stable on the default mouth with Table 1's materials
-    /// (tissue mu 800 Pa, K 7000 Pa; saliva mu 7700 Pa, K 191000 Pa; rho 1050 kg/m^3;
-    /// kappa 0.075), skull fixed and jaw prescribed.
+    /// Table 1's time step is stable on the default mouth with Table 1's materials, damping
+    /// and hourglass coefficient, skull fixed and jaw prescribed.
     #[test]
     fn table_1_time_step_is_stable() {
-        use crate::material::NeoHookean;
-        use crate::problem::{MaterialSpec, Numerics, Physics, Problem, TimeSettings};
-        use crate::tled::boundary::BoundaryConditions;
+        use crate::problem::boundary::BoundaryConditions;
+        use crate::problem::{table1, Numerics, Physics, Problem, TimeSettings};
         use crate::tled::precompute::Discretisation;
         use crate::tled::stability::analyse;
         let m = generate(&MouthParams::default()).unwrap();
@@ -930,33 +928,16 @@ mod tests {
         let p = Problem {
             source: "mouth".into(),
             mesh: m.mesh.clone(),
-            materials: vec![
-                MaterialSpec {
-                    name: "tissue".into(),
-                    law: NeoHookean {
-                        mu: 800.0,
-                        bulk: 7000.0,
-                    },
-                    density: 1050.0,
-                },
-                MaterialSpec {
-                    name: "saliva".into(),
-                    law: NeoHookean {
-                        mu: 7700.0,
-                        bulk: 191000.0,
-                    },
-                    density: 1050.0,
-                },
-            ],
+            materials: vec![table1::TISSUE.spec("tissue"), table1::SALIVA.spec("saliva")],
             element_material,
             bc,
             time: TimeSettings {
-                dt: 1e-5,
-                total_time: 1.0,
-                output_every: 100,
+                dt: table1::TIME_STEP,
+                total_time: table1::TOTAL_TIME,
+                output_every: table1::OUTPUT_EVERY,
             },
             numerics: Numerics {
-                damping: 80.0,
+                damping: table1::DAMPING,
                 ..Default::default()
             },
             additive_constraints: false,
@@ -969,7 +950,7 @@ mod tests {
             "critical dt {:.3e} s (element estimate {:.3e} s at element {})",
             r.critical_time_step, r.element_estimate, r.limiting_element
         );
-        assert!(r.critical_time_step > 1e-5);
+        assert!(r.critical_time_step > table1::TIME_STEP);
     }
 
     #[test]

@@ -28,7 +28,7 @@
 
 use crate::material::neo_hookean::pk2_stress;
 use crate::real::Real;
-use crate::tled::simd::BLOCK_CONSTANTS;
+use crate::tled::simd::{SimdReal, BLOCK_CONSTANTS};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -166,7 +166,7 @@ pub const ELEMENT_CHUNK: usize = 256;
 /// finite), if any: the caller stops the run there.
 ///
 /// Lane-parallel (`tled::simd`), bit-identical to [`element_forces_scalar`].
-pub fn element_forces<T: Real>(
+pub fn element_forces<T: SimdReal>(
     el: &ElementArrays<T>,
     u: &[[T; 3]],
     out: &mut [[[T; 3]; 8]],
@@ -176,7 +176,7 @@ pub fn element_forces<T: Real>(
 
 /// [`element_forces`] with the portable lanes (no AVX2) whatever the processor (for tests:
 /// both copies must give the same bits).
-pub fn element_forces_portable<T: Real>(
+pub fn element_forces_portable<T: SimdReal>(
     el: &ElementArrays<T>,
     u: &[[T; 3]],
     out: &mut [[[T; 3]; 8]],
@@ -289,7 +289,7 @@ mod tests {
             .collect()
     }
 
-    fn lanes_equal_scalar<T: Real>() {
+    fn lanes_equal_scalar<T: SimdReal>() {
         for (k, ne) in [1, 3, 4, 5, 8, 13, 255, 256, 300, 517]
             .into_iter()
             .enumerate()
@@ -317,7 +317,7 @@ mod tests {
         lanes_equal_scalar::<f32>();
     }
 
-    fn reports_first_bad_element<T: Real>() {
+    fn reports_first_bad_element<T: SimdReal>() {
         let ne = 300;
         let (el, mut u) = random_case::<T>(ne, ne + 9, 5);
         let mut f = vec![[[T::ZERO; 3]; 8]; ne];

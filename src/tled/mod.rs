@@ -1,7 +1,6 @@
 //! Total Lagrangian explicit dynamics (paper section 3.2): precompute, the three stages of
 //! a step (`element_forces`, `saliva_forces` on the saliva elements' own blocks,
 //! `node_update` with the constraints), stability.
-pub mod boundary;
 pub mod element_forces;
 pub mod node_update;
 pub mod precompute;

@@ -5,8 +5,8 @@
 use crate::element::hex8;
 use crate::material::saliva::{self, SalivaParams};
 use crate::mesh::NodeGather;
+use crate::problem::boundary::{LoadCurve, PrescribedRotation};
 use crate::problem::Problem;
-use crate::tled::boundary::{LoadCurve, PrescribedRotation};
 
 /// Per-DOF constraint plan. A DOF index is `3 * node + component`.
 #[derive(Clone, Debug, Default)]
@@ -41,6 +41,9 @@ pub struct SalivaPlan {
     /// Index into `groups` (the saliva set the element belongs to).
     pub group: Vec<u32>,
     pub groups: Vec<SalivaParams>,
+    /// Eq. (11)'s force decay factor per step of each group (at the problem's `dt`), the
+    /// value both backends round to their precision.
+    pub decay_factor: Vec<f64>,
 }
 
 impl SalivaPlan {
@@ -173,6 +176,12 @@ impl Discretisation {
 fn plan_saliva(p: &Problem) -> SalivaPlan {
     let mut plan = SalivaPlan {
         groups: p.physics.saliva.iter().map(|s| s.params.clone()).collect(),
+        decay_factor: p
+            .physics
+            .saliva
+            .iter()
+            .map(|s| s.params.decay.factor(p.time.dt))
+            .collect(),
         ..Default::default()
     };
     for (e, &m) in p.element_material.iter().enumerate() {

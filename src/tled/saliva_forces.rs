@@ -29,15 +29,11 @@ pub struct SalivaState<T> {
 }
 
 impl<T: Real> SalivaState<T> {
-    pub fn new(plan: &SalivaPlan, dt: f64) -> Self {
+    pub fn new(plan: &SalivaPlan) -> Self {
         let n = plan.elements.len();
         SalivaState {
             across: plan.across.iter().map(|a| a.map(T::from_f64)).collect(),
-            decay: plan
-                .groups
-                .iter()
-                .map(|g| T::from_f64(g.decay.factor(dt)))
-                .collect(),
+            decay: plan.decay_factor.iter().map(|&f| T::from_f64(f)).collect(),
             evaporated: vec![0.0; plan.groups.len()],
             previous: vec![[[T::ZERO; 3]; 8]; n],
             broken: vec![false; n],

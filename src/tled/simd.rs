@@ -88,30 +88,7 @@ pub trait Lanes<T: Real, const L: usize>:
     }
 }
 
-/// Portable lanes: `[T; L]`, one scalar operation per lane.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(transparent)]
-pub struct V<T, const L: usize>(pub [T; L]);
-
-macro_rules! array_op {
-    ($tr:ident, $f:ident, $op:tt) => {
-        impl<T: Real, const L: usize> $tr for V<T, L> {
-            type Output = Self;
-            #[inline(always)]
-            fn $f(self, o: Self) -> Self {
-                let mut r = self.0;
-                for l in 0..L {
-                    r[l] = self.0[l] $op o.0[l];
-                }
-                V(r)
-            }
-        }
-    };
-}
-array_op!(Add, add, +);
-array_op!(Sub, sub, -);
-array_op!(Mul, mul, *);
-array_op!(Div, div, /);
+pub use crate::lanes::V;
 
 impl<T: Real, const L: usize> Lanes<T, L> for V<T, L> {
     #[inline(always)]
@@ -346,6 +323,11 @@ pub trait LaneKernel: Sized {
         out: &mut [[[Self; 3]; 8]],
     ) -> usize;
 }
+
+/// A [`Real`] the lane-parallel element kernel is implemented for (`f32`, `f64`): what the
+/// stepping code asks of its precision.
+pub trait SimdReal: Real + LaneKernel {}
+impl<T: Real + LaneKernel> SimdReal for T {}
 
 macro_rules! lane_kernel {
     ($t:ty, $lanes:literal, $avx:ident) => {

@@ -9,13 +9,14 @@
 //! 6. buffers rotate.
 
 use crate::error::{Error, Result};
+use crate::problem::boundary::LoadCurve;
 use crate::problem::Problem;
 use crate::real::Real;
-use crate::tled::boundary::LoadCurve;
 use crate::tled::element_forces::{element_forces, ElementArrays};
 use crate::tled::node_update::{gather_all, node_update, CentralDifference};
 use crate::tled::precompute::Discretisation;
 use crate::tled::saliva_forces::{saliva_forces, SalivaState};
+use crate::tled::simd::SimdReal;
 
 /// Energies of a state (J).
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
@@ -44,7 +45,7 @@ pub struct Simulation<T: Real> {
     niftysim_timing: bool,
 }
 
-impl<T: Real> Simulation<T> {
+impl<T: SimdReal> Simulation<T> {
     /// Validates the problem and precomputes everything. Starts from rest, `u = 0`.
     pub fn new(problem: &Problem) -> Result<Self> {
         problem.validate()?;
@@ -62,7 +63,7 @@ impl<T: Real> Simulation<T> {
             u_next: vec![[T::ZERO; 3]; nn],
             elem_f: vec![[[T::ZERO; 3]; 8]; ne],
             r_ext: vec![[T::ZERO; 3]; nn],
-            saliva: SalivaState::new(&disc.saliva, problem.time.dt),
+            saliva: SalivaState::new(&disc.saliva),
             prescribed_acc: Vec::with_capacity(disc.constraints.prescribed_dofs.len()),
             step: 0,
             num_steps: problem.num_steps(),

@@ -642,10 +642,6 @@ fn blend(input: &InputArgs, shapes: &[String], out: &Path) -> sticky_lips::Resul
     Ok(())
 }
 
-/// Table 1's materials, used for meshes written without a scenario: (mu, K, rho).
-const TABLE1_TISSUE: (f64, f64, f64) = (800.0, 7000.0, 1050.0);
-const TABLE1_SALIVA: (f64, f64, f64) = (7700.0, 191000.0, 1050.0);
-
 fn write_mesh_outputs(
     out: &Path,
     mesh: &sticky_lips::mesh::Mesh,
@@ -681,20 +677,30 @@ fn write_mesh_outputs(
     let sets: Vec<niftysim::SetMaterial> = groups
         .iter()
         .map(|(name, els)| {
-            let (mu, bulk, density) = if name == "saliva" {
-                TABLE1_SALIVA
+            // meshes written without a scenario get Table 1's materials
+            let m = if name == "saliva" {
+                sticky_lips::problem::table1::SALIVA
             } else {
-                TABLE1_TISSUE
+                sticky_lips::problem::table1::TISSUE
             };
             niftysim::SetMaterial {
                 elements: els,
-                mu,
-                bulk,
-                density,
+                mu: m.mu,
+                bulk: m.bulk,
+                density: m.density,
             }
         })
         .collect();
-    niftysim::write_model(&out.join("model.xml"), mesh, &sets, 1e-5, 1.0, 80.0, 0.075)
+    use sticky_lips::problem::table1;
+    niftysim::write_model(
+        &out.join("model.xml"),
+        mesh,
+        &sets,
+        table1::TIME_STEP,
+        table1::TOTAL_TIME,
+        table1::DAMPING,
+        table1::HOURGLASS_KAPPA,
+    )
 }
 
 fn mouth(params: Option<&Path>, resolution: Option<f64>, out: &Path) -> sticky_lips::Result<()> {

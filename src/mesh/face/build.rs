@@ -49,12 +49,12 @@
 
 use super::prepare::{FaceSource, MuscleLandmarks};
 use crate::error::{Error, Location, Result};
-use crate::io::obj::QuadSurface;
 use crate::measures::LipColumns;
 use crate::mesh::extrude::{extrude_with, Direction};
+use crate::mesh::surface::QuadSurface;
 use crate::mesh::Mesh;
 use crate::muscle::Muscle;
-use crate::tled::boundary::{Fixed, LoadCurve, LoadShape, PrescribedRotation};
+use crate::problem::boundary::{Fixed, LoadCurve, LoadShape, PrescribedRotation};
 use std::collections::BTreeMap;
 
 /// The chin's outline is searched from this far below the lower lip's contour (m): the

@@ -40,7 +40,7 @@
 
 use super::topology::{self, edge, Adjacency, Edge};
 use crate::error::{Error, Location, Result};
-use crate::io::obj::QuadSurface;
+use crate::mesh::surface::QuadSurface;
 use std::collections::{BTreeMap, BTreeSet};
 
 /// Edges a vertex must be away along the surface for its distance to count as a pinch.

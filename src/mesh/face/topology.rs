@@ -2,7 +2,7 @@
 //! components and sub-surfaces. Deterministic: maps are ordered (`BTreeMap`), results do not
 //! depend on hashing.
 
-use crate::io::obj::QuadSurface;
+use crate::mesh::surface::QuadSurface;
 use std::collections::BTreeMap;
 
 /// An undirected edge, smaller vertex first.

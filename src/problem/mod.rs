@@ -1,6 +1,10 @@
 //! The problem a run solves, independent of the input format: mesh, materials,
 //! boundary conditions, time stepping and numerical options. SI units throughout;
-//! readers in `io` convert on the way in.
+//! readers in `io` convert on the way in. Nothing here depends on the solver: `boundary`
+//! describes the constraints and loads, `table1` holds the paper's parameters.
+
+pub mod boundary;
+pub mod table1;
 
 use crate::element::hex8::GradientVariant;
 use crate::error::{Error, Location, Result};
@@ -8,7 +12,7 @@ use crate::material::saliva::SalivaParams;
 use crate::material::NeoHookean;
 use crate::mesh::Mesh;
 use crate::muscle::Muscle;
-use crate::tled::boundary::BoundaryConditions;
+use boundary::BoundaryConditions;
 
 /// A material assigned to a set of elements.
 #[derive(Clone, Debug, PartialEq)]
@@ -33,9 +37,10 @@ pub struct TimeSettings {
 /// Numerical options of the TLED scheme.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Numerics {
-    /// Mass-proportional damping coefficient `alpha` (1/s): damping matrix `alpha M`.
+    /// Mass-proportional damping coefficient `alpha` (1/s): damping matrix `alpha M`
+    /// (default 0: undamped; Table 1's value is [`table1::DAMPING`]).
     pub damping: f64,
-    /// Hourglass control coefficient `kappa` (dimensionless; Table 1: 0.075).
+    /// Hourglass control coefficient `kappa` (dimensionless; default [`table1::HOURGLASS_KAPPA`]).
     pub hourglass_kappa: f64,
     pub variant: GradientVariant,
     /// NiftySim's timing quirks (as its 2.5 source steps): `NumSteps + 1` iterations,
@@ -47,7 +52,7 @@ impl Default for Numerics {
     fn default() -> Self {
         Numerics {
             damping: 0.0,
-            hourglass_kappa: 0.075,
+            hourglass_kappa: table1::HOURGLASS_KAPPA,
             variant: GradientVariant::MeanGradient,
             niftysim_timing: false,
         }
