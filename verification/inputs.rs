@@ -231,7 +231,7 @@ fn malformed_toml_names_file_and_line_or_field() {
         ),
         (
             GOOD_TOML.replace("dof = \"z\"", "dof = \"w\""),
-            "field `displacement[0].dof`",
+            "field `displacement[0].dof`: \"w\" is not a DOF",
         ),
         (
             GOOD_TOML.replace("nodes = \"z_max\"", "nodes = \"z_min\""),
@@ -239,7 +239,26 @@ fn malformed_toml_names_file_and_line_or_field() {
         ),
         (
             GOOD_TOML.replace("generator = \"block\"", "generator = \"sphere\""),
-            "field `mesh.generator`",
+            "case.toml:3: unknown variant `sphere`",
+        ),
+        (
+            GOOD_TOML.replace("[mesh]", "[units]\nlength = \"km\"\n\n[mesh]"),
+            "case.toml:3: unknown variant `km`",
+        ),
+        (
+            GOOD_TOML.replace("mu = 800.0", "mu = 800.0\nmodel = \"ogden\""),
+            "case.toml:10: unknown variant `ogden`",
+        ),
+        (
+            GOOD_TOML.replace(
+                "nodes = \"z_min\"",
+                "nodes = \"z_min\"\ndofs = [\"x\", \"w\"]",
+            ),
+            "case.toml:15: dofs: \"w\" is not a DOF",
+        ),
+        (
+            GOOD_TOML.replace("nodes = \"z_min\"", "nodes = \"z_min\"\ndofs = []"),
+            "case.toml:15: dofs: expected \"all\" or a list",
         ),
         (
             GOOD_TOML.replace("cells = [2, 2, 2]", "cells = [2, 0, 2]"),

@@ -58,14 +58,103 @@ pub struct ScenarioFile {
 #[serde(deny_unknown_fields)]
 pub struct Units {
     /// `"m"` (default), `"cm"` or `"mm"`.
-    pub length: Option<String>,
+    pub length: Option<LengthUnit>,
+}
+
+/// The length unit of a scenario file's coordinates, sizes and displacements.
+#[derive(Deserialize, Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub enum LengthUnit {
+    #[default]
+    #[serde(rename = "m")]
+    Metre,
+    #[serde(rename = "cm")]
+    Centimetre,
+    #[serde(rename = "mm")]
+    Millimetre,
+}
+
+impl LengthUnit {
+    /// Metres per unit.
+    pub fn metres(self) -> f64 {
+        match self {
+            LengthUnit::Metre => 1.0,
+            LengthUnit::Centimetre => 1e-2,
+            LengthUnit::Millimetre => 1e-3,
+        }
+    }
+}
+
+/// `mesh.generator`: where the mesh comes from.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum Generator {
+    /// A box of `cells` hexahedra (`origin`, `size`).
+    Block,
+    /// A box with its interior nodes moved at random (`distortion`, `seed`).
+    DistortedBlock,
+    /// Boxes stacked along z (`layers`).
+    Layers,
+    /// The procedural mouth (`[mesh.mouth]`).
+    Mouth,
+    /// A real face (`file`, `[mesh.face]`).
+    Face,
+    /// The nodes, elements and element sets of a NiftySim XML model (`file`).
+    Niftysim,
+}
+
+/// `materials[].model`: the constitutive law.
+#[derive(Deserialize, Debug, Default, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum MaterialModel {
+    #[default]
+    NeoHookean,
+}
+
+/// `fix[].dofs`: `"all"` or a list of DOFs (`"x"`, `"y"`, `"z"` or `0`, `1`, `2`), read as a
+/// mask of the three DOFs.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(try_from = "toml::Value")]
+pub struct DofMask(pub [bool; 3]);
+
+impl TryFrom<toml::Value> for DofMask {
+    type Error = String;
+    fn try_from(v: toml::Value) -> std::result::Result<Self, String> {
+        let mut mask = [false; 3];
+        match &v {
+            toml::Value::String(s) if s == "all" => return Ok(DofMask([true; 3])),
+            toml::Value::Array(a) if !a.is_empty() => {
+                for d in a {
+                    let k = match d {
+                        toml::Value::String(s) => dof_of_name(s),
+                        toml::Value::Integer(k) => (0..3).contains(k).then_some(*k as usize),
+                        _ => None,
+                    };
+                    let k =
+                        k.ok_or_else(|| format!("dofs: {d} is not a DOF (x, y, z or 0, 1, 2)"))?;
+                    mask[k] = true;
+                }
+                Ok(DofMask(mask))
+            }
+            _ => Err(format!(
+                "dofs: expected \"all\" or a list like [\"x\", \"z\"], got {v}"
+            )),
+        }
+    }
+}
+
+fn dof_of_name(s: &str) -> Option<usize> {
+    match s {
+        "x" => Some(0),
+        "y" => Some(1),
+        "z" => Some(2),
+        _ => None,
+    }
 }
 
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct MeshSection {
-    /// `"block"`, `"distorted_block"` or `"niftysim"` (nodes, elements and element sets of an XML model).
-    pub generator: String,
+    pub generator: Generator,
     pub origin: Option<[f64; 3]>,
     pub size: Option<[f64; 3]>,
     pub cells: Option<[usize; 3]>,
@@ -138,8 +227,8 @@ pub struct MaterialDef {
     pub name: String,
     /// Element set the material applies to (`"all"` by default).
     pub elements: Option<String>,
-    /// `"neo_hookean"`.
-    pub model: Option<String>,
+    /// The constitutive law (`"neo_hookean"`, the default and only one).
+    pub model: Option<MaterialModel>,
     /// Shear modulus (Pa).
     pub mu: f64,
     /// Bulk modulus (Pa).
@@ -154,7 +243,7 @@ pub struct MaterialDef {
 pub struct FixDef {
     pub nodes: NodeRef,
     /// `"all"` or a list of `"x"`, `"y"`, `"z"` (default `"all"`).
-    pub dofs: Option<toml::Value>,
+    pub dofs: Option<DofMask>,
 }
 
 #[derive(Deserialize, Debug)]
@@ -402,28 +491,65 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
         Error::input(f, line_of(text, e.span()), msg)
     })?;
     let base = path.parent().unwrap_or(Path::new("."));
-    let scale = match sf.units.length.as_deref() {
-        None | Some("m") => 1.0,
-        Some("cm") => 1e-2,
-        Some("mm") => 1e-3,
-        Some(o) => {
-            return Err(Error::field(
-                f,
-                "units.length",
-                format!("unknown unit `{o}` (m, cm or mm)"),
-            ))
-        }
+    let scale = sf.units.length.unwrap_or_default().metres();
+    let (mut mesh, anatomy) = build_mesh(&sf.mesh, f, base, scale)?;
+    add_node_sets(&mut mesh, &sf.node_sets, f, scale)?;
+    let r = Reader {
+        f,
+        mesh: &mesh,
+        scale,
+        total: sf.time.total,
     };
-    let sc3 = |v: [f64; 3]| v.map(|x| x * scale);
+    let (materials, element_material) = r.materials(&sf.materials)?;
+    let bc = r.boundary_conditions(&sf, anatomy.as_ref())?;
+    let curve = |c: &CurveDef, field: &str, default: LoadShape| r.curve(c, field, default);
+    let mut physics = read_physics(&sf, f, base, scale, &materials, &curve)?;
+    r.mouth_model_physics(&sf, anatomy.as_ref(), &mut physics)?;
+    let nd = &sf.numerics;
+    let default = Numerics::default();
+    let problem = Problem {
+        source: file.clone(),
+        mesh,
+        materials,
+        element_material,
+        bc,
+        time: TimeSettings {
+            dt: sf.time.dt,
+            total_time: sf.time.total,
+            output_every: sf.time.output_every.unwrap_or(table1::OUTPUT_EVERY),
+        },
+        numerics: Numerics {
+            damping: nd.damping.unwrap_or(default.damping),
+            hourglass_kappa: nd.hourglass_kappa.unwrap_or(default.hourglass_kappa),
+            variant: nd.variant.unwrap_or(default.variant),
+            niftysim_timing: false,
+        },
+        additive_constraints: false,
+        physics,
+    };
+    problem.validate()?;
+    Ok(Scenario {
+        problem,
+        title: sf.title,
+        default_output: sf.output.dir.map(|d| base.join(d)),
+    })
+}
 
-    // ---- mesh
-    let m = &sf.mesh;
+/// `[mesh]`: the mesh of the generator, in metres, with the element set `all`; for mouth
+/// models also their anatomy (jaw, skull, muscles, lip columns).
+fn build_mesh(
+    m: &MeshSection,
+    f: &str,
+    base: &Path,
+    scale: f64,
+) -> Result<(Mesh, Option<crate::mesh::anatomy::MouthAnatomy>)> {
+    let sc3 = |v: [f64; 3]| v.map(|x| x * scale);
     let need = |v: Option<[f64; 3]>, k: &str| {
         v.ok_or_else(|| Error::field(f, format!("mesh.{k}"), "required by this generator"))
     };
-    let mut anatomy: Option<crate::mesh::anatomy::MouthAnatomy> = None;
-    let mut mesh: Mesh = match m.generator.as_str() {
-        "block" | "distorted_block" => {
+    let mut anatomy = None;
+    let mut mesh: Mesh = match m.generator {
+        Generator::Block | Generator::DistortedBlock => {
             let cells = m
                 .cells
                 .ok_or_else(|| Error::field(f, "mesh.cells", "required by this generator"))?;
@@ -439,7 +565,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
                 return Err(Error::field(f, "mesh.size", "every edge must be positive"));
             }
             let origin = sc3(m.origin.unwrap_or([0.0; 3]));
-            if m.generator == "block" {
+            if m.generator == Generator::Block {
                 generate::block(origin, size, cells)
             } else {
                 let frac = m.distortion.unwrap_or(0.25);
@@ -453,7 +579,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
                 generate::distorted_block(origin, size, cells, frac, m.seed.unwrap_or(1))
             }
         }
-        "layers" => {
+        Generator::Layers => {
             let layers = m.layers.clone().ok_or_else(|| {
                 Error::field(f, "mesh.layers", "required by the layers generator")
             })?;
@@ -489,13 +615,13 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
                 &scaled,
             )
         }
-        "mouth" => {
+        Generator::Mouth => {
             let params = m.mouth.clone().unwrap_or_default();
             let model = crate::mesh::mouth::generate(&params)?;
             anatomy = Some(model.anatomy());
             model.mesh
         }
-        "face" => {
+        Generator::Face => {
             use crate::mesh::face;
             let src = match &m.file {
                 Some(rel) => face::read_dir(&base.join(rel))?,
@@ -507,7 +633,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
             anatomy = Some(model.anatomy());
             model.mesh
         }
-        "niftysim" => {
+        Generator::Niftysim => {
             let rel = m.file.as_ref().ok_or_else(|| {
                 Error::field(f, "mesh.file", "required by the niftysim generator")
             })?;
@@ -525,22 +651,17 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
             }
             mesh
         }
-        o => {
-            return Err(Error::field(
-                f,
-                "mesh.generator",
-                format!(
-                "unknown generator `{o}` (block, distorted_block, layers, mouth, face, niftysim)"
-            ),
-            ))
-        }
     };
     mesh.element_sets
         .entry("all".into())
         .or_insert_with(|| (0..mesh.elements.len() as u32).collect());
+    Ok((mesh, anatomy))
+}
 
-    // ---- node sets
-    for (i, ns) in sf.node_sets.iter().enumerate() {
+/// `[[node_sets]]`: each set by index list or box (in the file's length unit).
+fn add_node_sets(mesh: &mut Mesh, sets: &[NodeSetDef], f: &str, scale: f64) -> Result<()> {
+    let sc3 = |v: [f64; 3]| v.map(|x| x * scale);
+    for (i, ns) in sets.iter().enumerate() {
         let field = format!("node_sets[{i}] ({})", ns.name);
         let nodes: Vec<u32> = match (&ns.nodes, ns.box_min, ns.box_max) {
             (Some(list), None, None) => {
@@ -576,39 +697,59 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
         }
         mesh.node_sets.insert(ns.name.clone(), nodes);
     }
-    let resolve = |r: &NodeRef, field: &str| -> Result<Vec<u32>> {
+    Ok(())
+}
+
+/// What the sections after `[mesh]` are read against: the file's name (for errors), the
+/// mesh with its node sets, the length scale and the run's duration (the default end of a
+/// load curve).
+struct Reader<'a> {
+    f: &'a str,
+    mesh: &'a Mesh,
+    scale: f64,
+    total: f64,
+}
+
+impl Reader<'_> {
+    fn sc3(&self, v: [f64; 3]) -> [f64; 3] {
+        v.map(|x| x * self.scale)
+    }
+
+    /// The nodes of a set name or index list.
+    fn nodes(&self, r: &NodeRef, field: &str) -> Result<Vec<u32>> {
         match r {
-            NodeRef::Set(name) => mesh.node_sets.get(name).cloned().ok_or_else(|| {
-                let known: Vec<&String> = mesh.node_sets.keys().collect();
+            NodeRef::Set(name) => self.mesh.node_sets.get(name).cloned().ok_or_else(|| {
+                let known: Vec<&String> = self.mesh.node_sets.keys().collect();
                 Error::field(
-                    f,
+                    self.f,
                     field,
                     format!("unknown node set `{name}` (known: {known:?})"),
                 )
             }),
             NodeRef::List(l) => Ok(l.clone()),
         }
-    };
-    let dof = |d: &DofRef, field: &str| -> Result<usize> {
-        match d {
-            DofRef::Index(i) if *i < 3 => Ok(*i),
-            DofRef::Name(s) if s == "x" => Ok(0),
-            DofRef::Name(s) if s == "y" => Ok(1),
-            DofRef::Name(s) if s == "z" => Ok(2),
-            _ => Err(Error::field(
-                f,
+    }
+
+    fn dof(&self, d: &DofRef, field: &str) -> Result<usize> {
+        let (k, shown) = match d {
+            DofRef::Index(i) => ((*i < 3).then_some(*i), i.to_string()),
+            DofRef::Name(s) => (dof_of_name(s), format!("\"{s}\"")),
+        };
+        k.ok_or_else(|| {
+            Error::field(
+                self.f,
                 field,
-                format!("`{d:?}` is not a DOF (x, y, z or 0, 1, 2)"),
-            )),
-        }
-    };
-    let total = sf.time.total;
-    let curve = |c: &CurveDef, field: &str, default: LoadShape| -> Result<LoadCurve> {
+                format!("{shown} is not a DOF (x, y, z or 0, 1, 2)"),
+            )
+        })
+    }
+
+    fn curve(&self, c: &CurveDef, field: &str, default: LoadShape) -> Result<LoadCurve> {
         let shape = match &c.shape {
             None => default,
             Some(s) => LoadShape::parse(s).ok_or_else(|| {
                 Error::field(
-                    f,
+                    self.f,
                     format!("{field}.shape"),
                     format!(
                         "unknown shape `{s}` (ramp, poly345, step, hilly, ramphold, smooth_step)"
@@ -617,10 +758,10 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
             })?,
         };
         let start = c.start.unwrap_or(0.0);
-        let duration = c.duration.unwrap_or(total - start);
+        let duration = c.duration.unwrap_or(self.total - start);
         if !(duration > 0.0) {
             return Err(Error::field(
-                f,
+                self.f,
                 format!("{field}.duration"),
                 format!("must be positive, got {duration}"),
             ));
@@ -630,139 +771,142 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
             start,
             duration,
         })
-    };
-
-    // ---- materials
-    let mut materials = Vec::new();
-    let mut element_material = vec![u32::MAX; mesh.elements.len()];
-    for (i, md) in sf.materials.iter().enumerate() {
-        if let Some(model) = &md.model {
-            if model != "neo_hookean" {
-                return Err(Error::field(
-                    f,
-                    format!("materials[{i}].model"),
-                    format!("unknown model `{model}` (neo_hookean)"),
-                ));
-            }
-        }
-        let set_name = md.elements.clone().unwrap_or_else(|| "all".into());
-        let set = mesh.element_sets.get(&set_name).ok_or_else(|| {
-            Error::field(
-                f,
-                format!("materials[{i}].elements"),
-                format!("unknown element set `{set_name}`"),
-            )
-        })?;
-        for &e in set {
-            element_material[e as usize] = i as u32;
-        }
-        materials.push(MaterialSpec {
-            name: md.name.clone(),
-            law: NeoHookean {
-                mu: md.mu,
-                bulk: md.bulk,
-            },
-            density: md.density,
-        });
-    }
-    if materials.is_empty() {
-        return Err(Error::field(
-            f,
-            "materials",
-            "at least one material is needed",
-        ));
     }
 
-    // ---- boundary conditions
-    let mut bc = BoundaryConditions::default();
-    for (i, d) in sf.fix.iter().enumerate() {
-        let field = format!("fix[{i}]");
-        let nodes = resolve(&d.nodes, &format!("{field}.nodes"))?;
-        let mut mask = [false; 3];
-        match &d.dofs {
-            None => mask = [true; 3],
-            Some(toml::Value::String(s)) if s == "all" => mask = [true; 3],
-            Some(toml::Value::Array(a)) => {
-                for v in a {
-                    let r = match v {
-                        toml::Value::String(s) => DofRef::Name(s.clone()),
-                        toml::Value::Integer(k) if *k >= 0 => DofRef::Index(*k as usize),
-                        _ => DofRef::Name(v.to_string()),
-                    };
-                    mask[dof(&r, &format!("{field}.dofs"))?] = true;
-                }
+    /// `[[materials]]`: the materials and the material of every element.
+    fn materials(&self, defs: &[MaterialDef]) -> Result<(Vec<MaterialSpec>, Vec<u32>)> {
+        let mut materials = Vec::new();
+        let mut element_material = vec![u32::MAX; self.mesh.elements.len()];
+        for (i, md) in defs.iter().enumerate() {
+            let MaterialModel::NeoHookean = md.model.unwrap_or_default();
+            let set_name = md.elements.clone().unwrap_or_else(|| "all".into());
+            let set = self.mesh.element_sets.get(&set_name).ok_or_else(|| {
+                Error::field(
+                    self.f,
+                    format!("materials[{i}].elements"),
+                    format!("unknown element set `{set_name}`"),
+                )
+            })?;
+            for &e in set {
+                element_material[e as usize] = i as u32;
             }
-            Some(o) => {
-                return Err(Error::field(
-                    f,
-                    format!("{field}.dofs"),
-                    format!("expected \"all\" or a list like [\"x\", \"z\"], got {o}"),
-                ))
-            }
+            materials.push(MaterialSpec {
+                name: md.name.clone(),
+                law: NeoHookean {
+                    mu: md.mu,
+                    bulk: md.bulk,
+                },
+                density: md.density,
+            });
         }
-        bc.fixed.push(Fixed { nodes, dofs: mask });
-    }
-    for (i, d) in sf.displacement.iter().enumerate() {
-        let field = format!("displacement[{i}]");
-        let nodes = resolve(&d.nodes, &format!("{field}.nodes"))?;
-        let values = vec![d.value * scale; nodes.len()];
-        bc.displacements.push(PrescribedDisplacement {
-            dof: dof(&d.dof, &format!("{field}.dof"))?,
-            nodes,
-            values,
-            curve: curve(&d.curve, &field, LoadShape::Ramp)?,
-        });
-    }
-    for (i, d) in sf.rotation.iter().enumerate() {
-        let field = format!("rotation[{i}]");
-        let n = crate::linalg::norm(&d.axis);
-        if !(n > 0.0) || !n.is_finite() {
+        if materials.is_empty() {
             return Err(Error::field(
-                f,
-                format!("{field}.axis"),
-                "must be a non-zero vector",
+                self.f,
+                "materials",
+                "at least one material is needed",
             ));
         }
-        bc.rotations.push(PrescribedRotation {
-            nodes: resolve(&d.nodes, &format!("{field}.nodes"))?,
-            point: sc3(d.point),
-            axis: d.axis.map(|v| v / n),
-            angle: d.angle,
-            curve: curve(&d.curve, &field, LoadShape::SmoothStep)?,
-        });
-    }
-    for (i, d) in sf.force.iter().enumerate() {
-        let field = format!("force[{i}]");
-        let nodes = resolve(&d.nodes, &format!("{field}.nodes"))?;
-        let values = vec![d.value; nodes.len()];
-        bc.forces.push(NodalForce {
-            dof: dof(&d.dof, &format!("{field}.dof"))?,
-            nodes,
-            values,
-            curve: curve(&d.curve, &field, LoadShape::Step)?,
-        });
-    }
-    if let Some(j) = &sf.jaw {
-        let model = anatomy.as_ref().ok_or_else(|| {
-            Error::field(
-                f,
-                "jaw",
-                "[jaw] needs a mouth model (generator `mouth` or `face`)",
-            )
-        })?;
-        bc.rotations
-            .push(model.jaw_rotation(j.angle, curve(&j.curve, "jaw", LoadShape::SmoothStep)?));
-    }
-    if let Some(g) = &sf.gravity {
-        bc.gravity.push(Gravity {
-            nodes: None,
-            acceleration: g.acceleration,
-            curve: curve(&g.curve, "gravity", LoadShape::Step)?,
-        });
+        Ok((materials, element_material))
     }
 
-    let mut physics = read_physics(&sf, f, base, scale, &materials, &curve)?;
-    if let Some(model) = &anatomy {
+    /// `[[fix]]`, `[[displacement]]`, `[[rotation]]`, `[[force]]`, `[jaw]` (after the
+    /// rotations), `[gravity]`.
+    fn boundary_conditions(
+        &self,
+        sf: &ScenarioFile,
+        anatomy: Option<&crate::mesh::anatomy::MouthAnatomy>,
+    ) -> Result<BoundaryConditions> {
+        let f = self.f;
+        let mut bc = BoundaryConditions::default();
+        for (i, d) in sf.fix.iter().enumerate() {
+            let field = format!("fix[{i}]");
+            bc.fixed.push(Fixed {
+                nodes: self.nodes(&d.nodes, &format!("{field}.nodes"))?,
+                dofs: d.dofs.map_or([true; 3], |m| m.0),
+            });
+        }
+        for (i, d) in sf.displacement.iter().enumerate() {
+            let field = format!("displacement[{i}]");
+            let nodes = self.nodes(&d.nodes, &format!("{field}.nodes"))?;
+            let values = vec![d.value * self.scale; nodes.len()];
+            bc.displacements.push(PrescribedDisplacement {
+                dof: self.dof(&d.dof, &format!("{field}.dof"))?,
+                nodes,
+                values,
+                curve: self.curve(&d.curve, &field, LoadShape::Ramp)?,
+            });
+        }
+        for (i, d) in sf.rotation.iter().enumerate() {
+            let field = format!("rotation[{i}]");
+            let n = crate::linalg::norm(&d.axis);
+            if !(n > 0.0) || !n.is_finite() {
+                return Err(Error::field(
+                    f,
+                    format!("{field}.axis"),
+                    "must be a non-zero vector",
+                ));
+            }
+            bc.rotations.push(PrescribedRotation {
+                nodes: self.nodes(&d.nodes, &format!("{field}.nodes"))?,
+                point: self.sc3(d.point),
+                axis: d.axis.map(|v| v / n),
+                angle: d.angle,
+                curve: self.curve(&d.curve, &field, LoadShape::SmoothStep)?,
+            });
+        }
+        for (i, d) in sf.force.iter().enumerate() {
+            let field = format!("force[{i}]");
+            let nodes = self.nodes(&d.nodes, &format!("{field}.nodes"))?;
+            let values = vec![d.value; nodes.len()];
+            bc.forces.push(NodalForce {
+                dof: self.dof(&d.dof, &format!("{field}.dof"))?,
+                nodes,
+                values,
+                curve: self.curve(&d.curve, &field, LoadShape::Step)?,
+            });
+        }
+        if let Some(j) = &sf.jaw {
+            let model = anatomy.ok_or_else(|| {
+                Error::field(
+                    f,
+                    "jaw",
+                    "[jaw] needs a mouth model (generator `mouth` or `face`)",
+                )
+            })?;
+            bc.rotations.push(
+                model.jaw_rotation(j.angle, self.curve(&j.curve, "jaw", LoadShape::SmoothStep)?),
+            );
+        }
+        if let Some(g) = &sf.gravity {
+            bc.gravity.push(Gravity {
+                nodes: None,
+                acceleration: g.acceleration,
+                curve: self.curve(&g.curve, "gravity", LoadShape::Step)?,
+            });
+        }
+        Ok(bc)
+    }
+
+    /// What a mouth model adds to the physics: `[[model_muscle]]` by name, the saliva's
+    /// axis across the layer where the scenario gives none, the lip columns and the model's
+    /// name.
+    fn mouth_model_physics(
+        &self,
+        sf: &ScenarioFile,
+        anatomy: Option<&crate::mesh::anatomy::MouthAnatomy>,
+        physics: &mut Physics,
+    ) -> Result<()> {
+        let f = self.f;
+        let Some(model) = anatomy else {
+            if !sf.model_muscle.is_empty() {
+                return Err(Error::field(
+                    f,
+                    "model_muscle",
+                    "[[model_muscle]] needs a mouth model (generator `mouth` or `face`)",
+                ));
+            }
+            return Ok(());
+        };
         for (i, mm) in sf.model_muscle.iter().enumerate() {
             let field = format!("model_muscle[{i}]");
             let mut m = model
@@ -783,7 +927,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
                 })?;
             m.strength = mm.strength;
             m.activation = mm.activation.unwrap_or(1.0);
-            m.curve = curve(&mm.curve, &field, LoadShape::SmoothStep)?;
+            m.curve = self.curve(&mm.curve, &field, LoadShape::SmoothStep)?;
             physics.muscles.push(m);
         }
         for s in physics.saliva.iter_mut() {
@@ -793,43 +937,8 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
         }
         physics.lip_columns = Some(model.columns.clone());
         physics.model = Some(model.source.clone());
-    } else if !sf.model_muscle.is_empty() {
-        return Err(Error::field(
-            f,
-            "model_muscle",
-            "[[model_muscle]] needs a mouth model (generator `mouth` or `face`)",
-        ));
+        Ok(())
     }
-    let nd = &sf.numerics;
-    let problem = Problem {
-        source: file.clone(),
-        mesh,
-        materials,
-        element_material,
-        bc,
-        time: TimeSettings {
-            dt: sf.time.dt,
-            total_time: sf.time.total,
-            output_every: sf.time.output_every.unwrap_or(table1::OUTPUT_EVERY),
-        },
-        numerics: {
-            let default = Numerics::default();
-            Numerics {
-                damping: nd.damping.unwrap_or(default.damping),
-                hourglass_kappa: nd.hourglass_kappa.unwrap_or(default.hourglass_kappa),
-                variant: nd.variant.unwrap_or(default.variant),
-                niftysim_timing: false,
-            }
-        },
-        additive_constraints: false,
-        physics,
-    };
-    problem.validate()?;
-    Ok(Scenario {
-        problem,
-        title: sf.title,
-        default_output: sf.output.dir.map(|d| base.join(d)),
-    })
 }
 
 type CurveFn<'a> = dyn Fn(&CurveDef, &str, LoadShape) -> Result<LoadCurve> + 'a;
