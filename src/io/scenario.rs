@@ -121,7 +121,7 @@ impl TryFrom<toml::Value> for DofMask {
     fn try_from(v: toml::Value) -> std::result::Result<Self, String> {
         let mut mask = [false; 3];
         match &v {
-            toml::Value::String(s) if s == "all" => return Ok(DofMask([true; 3])),
+            toml::Value::String(s) if s == "all" => Ok(DofMask([true; 3])),
             toml::Value::Array(a) if !a.is_empty() => {
                 for d in a {
                     let k = match d {
