@@ -112,7 +112,19 @@ impl Problem {
     pub fn validate(&self) -> Result<()> {
         let f = self.source.as_str();
         self.mesh.validate(f)?;
-        let pos = |v: f64| v.is_finite() && v > 0.0;
+        self.validate_materials(f)?;
+        self.validate_time_and_numerics(f)?;
+        self.validate_boundary_conditions(f)?;
+        self.validate_saliva(f)?;
+        self.validate_muscles(f)?;
+        if !self.additive_constraints {
+            self.validate_one_constraint_per_dof(f)?;
+        }
+        Ok(())
+    }
+
+    /// Positive moduli and densities; every element has a material.
+    fn validate_materials(&self, f: &str) -> Result<()> {
         for (i, m) in self.materials.iter().enumerate() {
             let field = |k: &str| format!("materials[{i}] ({}).{k}", m.name);
             if !pos(m.law.mu) {
@@ -151,6 +163,11 @@ impl Problem {
                 "element has no material (it is in no element set)",
             ));
         }
+        Ok(())
+    }
+
+    /// Positive time step and duration, at least one step per frame, non-negative damping and hourglass coefficient.
+    fn validate_time_and_numerics(&self, f: &str) -> Result<()> {
         if !pos(self.time.dt) {
             return Err(Error::field(
                 f,
@@ -182,6 +199,11 @@ impl Problem {
                 format!("must be >= 0, got {}", self.numerics.hourglass_kappa),
             ));
         }
+        Ok(())
+    }
+
+    /// Node indices in range, unit rotation axes, positive load-curve durations.
+    fn validate_boundary_conditions(&self, f: &str) -> Result<()> {
         let nn = self.mesh.nodes.len();
         let check_nodes = |what: &str, nodes: &[u32]| -> Result<()> {
             if let Some(&n) = nodes.iter().find(|&&n| n as usize >= nn) {
@@ -235,6 +257,11 @@ impl Problem {
                 check_nodes(&format!("gravity[{i}].nodes"), nodes)?;
             }
         }
+        Ok(())
+    }
+
+    /// Each saliva set: its material, moisture (map sizes, values), axes across the layer, glue, evaporation and decay.
+    fn validate_saliva(&self, f: &str) -> Result<()> {
         for (i, s) in self.physics.saliva.iter().enumerate() {
             let field = |k: &str| format!("saliva[{i}].{k}");
             if s.material as usize >= self.materials.len() {
@@ -340,6 +367,11 @@ impl Problem {
                 _ => {}
             }
         }
+        Ok(())
+    }
+
+    /// Each muscle: positive radius, strength and activation in range, a cylinder with nodes in it.
+    fn validate_muscles(&self, f: &str) -> Result<()> {
         for (i, m) in self.physics.muscles.iter().enumerate() {
             let field = |k: &str| format!("muscle[{i}] ({}).{k}", m.name);
             if !pos(m.radius) {
@@ -386,46 +418,56 @@ impl Problem {
                 return Err(Error::field(f, field("duration"), "must be positive"));
             }
         }
-        if !self.additive_constraints {
-            // every DOF may be constrained by at most one condition
-            let mut owner: Vec<Option<String>> = vec![None; 3 * nn];
-            let mut claim = |dof: usize, who: String| -> Result<()> {
-                if let Some(prev) = &owner[dof] {
-                    return Err(Error::field(
-                        f,
-                        who.clone(),
-                        format!(
-                            "node {} DOF {} is already constrained by {prev}",
-                            dof / 3,
-                            dof % 3
-                        ),
-                    ));
-                }
-                owner[dof] = Some(who);
-                Ok(())
-            };
-            for (i, c) in bc.fixed.iter().enumerate() {
-                for &n in &c.nodes {
-                    for d in 0..3 {
-                        if c.dofs[d] {
-                            claim(3 * n as usize + d, format!("fix[{i}]"))?;
-                        }
+        Ok(())
+    }
+
+    /// Every DOF is constrained by at most one condition (scenario files; NiftySim models add them up instead).
+    fn validate_one_constraint_per_dof(&self, f: &str) -> Result<()> {
+        let nn = self.mesh.nodes.len();
+        let bc = &self.bc;
+        // every DOF may be constrained by at most one condition
+        let mut owner: Vec<Option<String>> = vec![None; 3 * nn];
+        let mut claim = |dof: usize, who: String| -> Result<()> {
+            if let Some(prev) = &owner[dof] {
+                return Err(Error::field(
+                    f,
+                    who.clone(),
+                    format!(
+                        "node {} DOF {} is already constrained by {prev}",
+                        dof / 3,
+                        dof % 3
+                    ),
+                ));
+            }
+            owner[dof] = Some(who);
+            Ok(())
+        };
+        for (i, c) in bc.fixed.iter().enumerate() {
+            for &n in &c.nodes {
+                for d in 0..3 {
+                    if c.dofs[d] {
+                        claim(3 * n as usize + d, format!("fix[{i}]"))?;
                     }
                 }
             }
-            for (i, c) in bc.displacements.iter().enumerate() {
-                for &n in &c.nodes {
-                    claim(3 * n as usize + c.dof, format!("displacement[{i}]"))?;
-                }
+        }
+        for (i, c) in bc.displacements.iter().enumerate() {
+            for &n in &c.nodes {
+                claim(3 * n as usize + c.dof, format!("displacement[{i}]"))?;
             }
-            for (i, c) in bc.rotations.iter().enumerate() {
-                for &n in &c.nodes {
-                    for d in 0..3 {
-                        claim(3 * n as usize + d, format!("rotation[{i}]"))?;
-                    }
+        }
+        for (i, c) in bc.rotations.iter().enumerate() {
+            for &n in &c.nodes {
+                for d in 0..3 {
+                    claim(3 * n as usize + d, format!("rotation[{i}]"))?;
                 }
             }
         }
         Ok(())
     }
+}
+
+/// Finite and positive (NaN is not).
+fn pos(v: f64) -> bool {
+    v.is_finite() && v > 0.0
 }
