@@ -96,6 +96,22 @@ fn parse_f64(tok: Option<&str>, what: &str, file: &str, line: usize) -> Result<f
 
 /// Parses OBJ text; `file` names it in errors.
 pub fn parse_obj(text: &str, file: &str) -> Result<QuadSurface> {
+    assemble(read_statements(text, file)?, file)
+}
+
+/// The statements of an OBJ file that matter here, as read: indices still unchecked against
+/// the final counts (an index may refer forward).
+struct Statements {
+    vertices: Vec<[f64; 3]>,
+    texcoords: Vec<[f64; 2]>,
+    /// Each quad's corners, its line and its group.
+    faces: Vec<([Corner; 4], usize, u32)>,
+    groups: Vec<String>,
+}
+
+/// Reads the `v`, `vt`, `g`/`usemtl` and `f` statements, joining continued lines and
+/// dropping comments.
+fn read_statements(text: &str, file: &str) -> Result<Statements> {
     let mut vertices: Vec<[f64; 3]> = Vec::new();
     let mut texcoords: Vec<[f64; 2]> = Vec::new();
     let mut faces: Vec<([Corner; 4], usize, u32)> = Vec::new();
@@ -177,23 +193,7 @@ pub fn parse_obj(text: &str, file: &str) -> Result<QuadSurface> {
                         ),
                     ));
                 }
-                let mut c = [Corner { v: 0, t: None }; 4];
-                for (k, tok) in corners.iter().enumerate() {
-                    let mut parts = tok.split('/');
-                    let vi = parts.next().unwrap_or("");
-                    let v = parse_index(vi, vertices.len(), "vertex", file, line_no)?;
-                    let t = match parts.next() {
-                        Some(ti) if !ti.is_empty() => Some(parse_index(
-                            ti,
-                            texcoords.len(),
-                            "texture coordinate",
-                            file,
-                            line_no,
-                        )?),
-                        _ => None,
-                    };
-                    c[k] = Corner { v, t };
-                }
+                let c = parse_corners(&corners, vertices.len(), texcoords.len(), file, line_no)?;
                 let g = match current_index {
                     Some(g) => g,
                     None => {
@@ -213,7 +213,48 @@ pub fn parse_obj(text: &str, file: &str) -> Result<QuadSurface> {
             _ => {}
         }
     }
+    Ok(Statements {
+        vertices,
+        texcoords,
+        faces,
+        groups,
+    })
+}
 
+/// The four corners `v[/t[/n]]` of an `f` statement (`nv` vertices and `nt` texture
+/// coordinates defined so far, for negative indices).
+fn parse_corners(
+    corners: &[&str],
+    nv: usize,
+    nt: usize,
+    file: &str,
+    line_no: usize,
+) -> Result<[Corner; 4]> {
+    let mut c = [Corner { v: 0, t: None }; 4];
+    for (k, tok) in corners.iter().enumerate() {
+        let mut parts = tok.split('/');
+        let vi = parts.next().unwrap_or("");
+        let v = parse_index(vi, nv, "vertex", file, line_no)?;
+        let t = match parts.next() {
+            Some(ti) if !ti.is_empty() => {
+                Some(parse_index(ti, nt, "texture coordinate", file, line_no)?)
+            }
+            _ => None,
+        };
+        c[k] = Corner { v, t };
+    }
+    Ok(c)
+}
+
+/// The quad surface: every index checked, texture coordinates per vertex (the first of a
+/// seam kept, with a note), groups in order of their first face.
+fn assemble(st: Statements, file: &str) -> Result<QuadSurface> {
+    let Statements {
+        vertices,
+        texcoords,
+        faces,
+        groups,
+    } = st;
     let nv = vertices.len();
     let nt = texcoords.len();
     let mut quads = Vec::with_capacity(faces.len());
