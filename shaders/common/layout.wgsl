@@ -4,7 +4,7 @@
 // (WG, DOF_FREE, DOF_FIXED, RULE_LATCHED, NEVER) are generated from Rust by
 // src/gpu/shaders.rs and prepended to every kernel.
 
-// Sizes and per-step row layout of one model (rows: src/gpu/sim.rs). Twin: layout::Params.
+// Sizes and per-step row layout of one model (rows: src/gpu/sim/pack.rs). Twin: layout::Params.
 struct Params {
     num_elements: u32,
     num_nodes: u32,

@@ -11,7 +11,8 @@
 //! - [`context`]: instance from the environment, adapter, device with the adapter's limits;
 //! - [`layout`]: the `#[repr(C)]` Pod structs and constants shared with WGSL;
 //! - [`shaders`]: assembly of the WGSL sources;
-//! - [`sim`]: [`GpuSimulation`], the same step contract as [`crate::tled::Simulation`].
+//! - [`sim`]: [`GpuSimulation`], the same step contract as [`crate::tled::Simulation`]
+//!   (packing, buffers, bindings derived from the WGSL declarations, stepping).
 
 pub mod context;
 pub mod layout;

@@ -41,18 +41,23 @@
 //! the bound). f64 kernels need `SHADER_F64`; their cube root is within about one f64 ulp of
 //! the CPU's.
 
+mod bindings;
+mod buffers;
+mod pack;
+mod readback;
+
 use crate::error::{Error, Result};
 use crate::gpu::context::GpuContext;
 use crate::gpu::layout::*;
-use crate::gpu::shaders::{kernel_source, Kernel, ShaderReal};
-use crate::material::saliva::BreakingRule;
+use crate::gpu::shaders::{Kernel, ShaderReal};
 use crate::problem::Problem;
 use crate::tled::element_forces::{element_forces, ElementArrays};
 use crate::tled::node_update::{gather_all, CentralDifference};
 use crate::tled::precompute::Discretisation;
 use crate::tled::saliva_forces::SalivaState;
-use crate::tled::solver::{constraint_time, load_value, Energies};
-use std::num::NonZeroU64;
+use crate::tled::solver::Energies;
+use buffers::{bytes_of_slice, load_bytes, Buffers};
+use readback::{map_and_read_after, read_buffers};
 use wgpu::util::DeviceExt;
 
 /// A stepping scalar the kernels exist for.
@@ -84,9 +89,6 @@ pub enum Stage {
     NodeUpdate,
 }
 
-/// Index in the step row of the constant 1 (see the module documentation).
-const ROW_ONE: u32 = 0;
-
 /// A submitted batch whose status has not been read yet.
 struct InFlight {
     /// Receives the status after the batch's last dispatch.
@@ -114,17 +116,7 @@ pub struct GpuSimulation<T: GpuReal> {
     el: ElementArrays<T>,
     element: Kernels,
     node: Kernels,
-    u_bufs: [wgpu::Buffer; 3],
-    table: wgpu::Buffer,
-    /// Per-step rows in `load_real` (see the module documentation).
-    step_row: wgpu::Buffer,
-    step_info: wgpu::Buffer,
-    status: wgpu::Buffer,
-    /// Saliva state, double-buffered by step parity: per saliva element the previous
-    /// modified force (24) and Q (1); broken and first broken step (2 u32).
-    sal_real: [wgpu::Buffer; 2],
-    sal_state: [wgpu::Buffer; 2],
-    step_stride: u64,
+    bufs: Buffers,
     real: ShaderReal,
     params: Params,
     step: usize,
@@ -136,191 +128,6 @@ pub struct GpuSimulation<T: GpuReal> {
     u_prev: Vec<[T; 3]>,
     saliva: SalivaState<T>,
     synced: bool,
-}
-
-#[derive(Clone, Copy)]
-pub(crate) enum Bind {
-    Uniform,
-    UniformDyn,
-    Read,
-    ReadWrite,
-}
-
-fn layout_entries(kinds: &[Bind]) -> Vec<wgpu::BindGroupLayoutEntry> {
-    kinds
-        .iter()
-        .enumerate()
-        .map(|(i, k)| wgpu::BindGroupLayoutEntry {
-            binding: i as u32,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: match k {
-                    Bind::Uniform | Bind::UniformDyn => wgpu::BufferBindingType::Uniform,
-                    Bind::Read => wgpu::BufferBindingType::Storage { read_only: true },
-                    Bind::ReadWrite => wgpu::BufferBindingType::Storage { read_only: false },
-                },
-                has_dynamic_offset: matches!(k, Bind::UniformDyn),
-                min_binding_size: None,
-            },
-            count: None,
-        })
-        .collect()
-}
-
-/// A compute pipeline for `kernel` with the given binding kinds, and one bind group per
-/// buffer list in `sets` (the StepInfo binding is bound at size `StepInfo` for dynamic offsets).
-pub(crate) fn build_kernel(
-    ctx: &GpuContext,
-    kernel: Kernel,
-    entry: &str,
-    real: ShaderReal,
-    kinds: &[Bind],
-    sets: &[Vec<&wgpu::Buffer>],
-) -> Result<(wgpu::ComputePipeline, Vec<wgpu::BindGroup>)> {
-    let d = &ctx.device;
-    ctx.scoped(&format!("building kernel `{entry}`"), || {
-        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(kernel.name()),
-            source: wgpu::ShaderSource::Wgsl(kernel_source(kernel, real).into()),
-        });
-        let bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some(entry),
-            entries: &layout_entries(kinds),
-        });
-        let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some(entry),
-            bind_group_layouts: &[Some(&bgl)],
-            immediate_size: 0,
-        });
-        let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(entry),
-            layout: Some(&pl),
-            module: &module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        let groups = sets
-            .iter()
-            .map(|bufs| {
-                let entries: Vec<wgpu::BindGroupEntry> = bufs
-                    .iter()
-                    .zip(kinds)
-                    .enumerate()
-                    .map(|(i, (b, k))| wgpu::BindGroupEntry {
-                        binding: i as u32,
-                        resource: match k {
-                            Bind::UniformDyn => {
-                                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                                    buffer: b,
-                                    offset: 0,
-                                    size: NonZeroU64::new(std::mem::size_of::<StepInfo>() as u64),
-                                })
-                            }
-                            _ => b.as_entire_binding(),
-                        },
-                    })
-                    .collect();
-                d.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some(entry),
-                    layout: &bgl,
-                    entries: &entries,
-                })
-            })
-            .collect();
-        (pipeline, groups)
-    })
-}
-
-/// Reads buffers back (each whole) in one submission.
-pub(crate) fn read_buffers(ctx: &GpuContext, bufs: &[&wgpu::Buffer]) -> Result<Vec<Vec<u8>>> {
-    let d = &ctx.device;
-    let total: u64 = bufs.iter().map(|b| b.size()).sum();
-    let staging = d.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("read back"),
-        size: total.max(4),
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut enc = d.create_command_encoder(&Default::default());
-    let mut off = 0;
-    for b in bufs {
-        enc.copy_buffer_to_buffer(b, 0, &staging, off, b.size());
-        off += b.size();
-    }
-    ctx.queue.submit([enc.finish()]);
-    map_and_read(ctx, &staging, bufs.iter().map(|b| b.size()))
-}
-
-fn map_and_read(
-    ctx: &GpuContext,
-    staging: &wgpu::Buffer,
-    sizes: impl Iterator<Item = u64>,
-) -> Result<Vec<Vec<u8>>> {
-    map_and_read_after(ctx, staging, None, sizes)
-}
-
-/// As [`map_and_read`], waiting only for submission `index` (and those before it) when given.
-fn map_and_read_after(
-    ctx: &GpuContext,
-    staging: &wgpu::Buffer,
-    index: Option<wgpu::SubmissionIndex>,
-    sizes: impl Iterator<Item = u64>,
-) -> Result<Vec<Vec<u8>>> {
-    let (tx, rx) = std::sync::mpsc::channel();
-    staging.map_async(wgpu::MapMode::Read, .., move |r| {
-        let _ = tx.send(r);
-    });
-    let wait = match index {
-        Some(i) => wgpu::PollType::Wait {
-            submission_index: Some(i),
-            timeout: None,
-        },
-        None => wgpu::PollType::wait_indefinitely(),
-    };
-    ctx.device
-        .poll(wait)
-        .map_err(|e| Error::Gpu(format!("waiting for the device: {e}")))?;
-    ctx.check_uncaptured()?;
-    rx.recv()
-        .map_err(|e| Error::Gpu(format!("read back: {e}")))?
-        .map_err(|e| Error::Gpu(format!("read back: {e}")))?;
-    let out = {
-        let view = staging
-            .get_mapped_range(..)
-            .map_err(|e| Error::Gpu(format!("read back: {e}")))?;
-        let mut out = Vec::new();
-        let mut off = 0usize;
-        for s in sizes {
-            out.push(view[off..off + s as usize].to_vec());
-            off += s as usize;
-        }
-        out
-    };
-    staging.unmap();
-    Ok(out)
-}
-
-/// Load magnitudes or curve values in the kernels' `load_real` (f64 wherever the kernels
-/// may use f64, so that each load entry is the f64 product rounded once, as on the CPU).
-fn load_bytes(v: &[f64], real: ShaderReal) -> Vec<u8> {
-    if real.needs_f64() {
-        bytes_of_slice(v)
-    } else {
-        bytes_of_slice(&v.iter().map(|&x| x as f32).collect::<Vec<f32>>())
-    }
-}
-
-/// One buffer list per rotation of the displacement buffers.
-fn three<'a>(f: impl Fn(usize) -> Vec<&'a wgpu::Buffer>) -> Vec<Vec<&'a wgpu::Buffer>> {
-    (0..3).map(f).collect()
-}
-
-fn bytes_of_slice<T: bytemuck::Pod>(v: &[T]) -> Vec<u8> {
-    let mut b = bytemuck::cast_slice::<T, u8>(v).to_vec();
-    // no zero-sized bindings, and sizes a multiple of 16
-    b.resize(b.len().max(16).div_ceil(16) * 16, 0);
-    b
 }
 
 impl<T: GpuReal> GpuSimulation<T> {
@@ -362,364 +169,34 @@ impl<T: GpuReal> GpuSimulation<T> {
         }
         let disc = Discretisation::new(problem);
         let nn = disc.num_nodes;
-        let ne = disc.num_elements();
         let el = ElementArrays::<T>::from_discretisation(&disc);
         let cd = CentralDifference::<T>::new(problem.time.dt, problem.numerics.damping, &disc.mass);
-        let d = &ctx.device;
-
-        // ---- model arrays (layouts as documented at the bindings in shaders/*.wgsl)
-        let conn: Vec<u32> = el.conn.iter().flatten().copied().collect();
-        let dhdx: Vec<T> = el.dhdx.iter().flatten().flatten().copied().collect();
-        let gamma: Vec<T> = el.gamma.iter().flatten().flatten().copied().collect();
-        let escal: Vec<T> = (0..ne)
-            .flat_map(|e| [el.weight[e], el.hg_k[e], el.mu[e], el.bulk[e]])
-            .collect();
-        let mut gather = disc.gather.offsets.clone();
-        gather.extend_from_slice(&disc.gather.slots);
-        let mut node_a = cd.a.clone();
-        node_a.push(cd.c1);
-        // the step row: [1 | load curves | prescribed curves | rotation matrices]
-        let c = &disc.constraints;
-        let n_loads = disc.loads.len();
-        let pres_base = 1 + n_loads;
-        let rot_base = pres_base + c.prescribed.len();
-        let row_stride = rot_base + 9 * c.rotations.len();
-        // loads: per node, in the CPU's accumulation order (group, then entry); a key is
-        // component | (row index of the group's curve value) << 2
-        let mut per_node: Vec<Vec<(u32, f64)>> = vec![Vec::new(); nn];
-        for (g, grp) in disc.loads.iter().enumerate() {
-            for &(dof, v) in &grp.entries {
-                per_node[dof as usize / 3].push(((dof % 3) | (((1 + g) as u32) << 2), v));
-            }
-        }
-        let mut load_key: Vec<u32> = Vec::with_capacity(nn + 1);
-        let mut load_val: Vec<f64> = Vec::new();
-        let mut keys = Vec::new();
-        load_key.push(0);
-        for list in &per_node {
-            for &(k, v) in list {
-                keys.push(k);
-                load_val.push(v);
-            }
-            load_key.push(keys.len() as u32);
-        }
-        load_key.extend(keys);
-        // constraints: what each DOF becomes after the update (rotation > prescribed > fixed,
-        // the order in which the CPU's apply_constraints overwrites); an imposed DOF is a
-        // list of terms (coefficient, row index), see the module documentation
-        let mut dof_slot = vec![DOF_FREE; 3 * nn];
-        for &k in &c.fixed {
-            dof_slot[k as usize] = DOF_FIXED;
-        }
-        let mut imposed: Vec<Vec<(f64, u32)>> = c
-            .prescribed_dofs
-            .iter()
-            .map(|_| vec![(0.0, ROW_ONE)])
-            .collect();
-        for (j, (_, entries)) in c.prescribed.iter().enumerate() {
-            for &(k, v) in entries {
-                let i = c
-                    .prescribed_dofs
-                    .binary_search(&k)
-                    .expect("prescribed dof planned");
-                imposed[i].push((v, (pres_base + j) as u32));
-            }
-        }
-        for (i, &k) in c.prescribed_dofs.iter().enumerate() {
-            dof_slot[k as usize] = i as u32;
-        }
-        for (r, rot) in c.rotations.iter().enumerate() {
-            for &n in &rot.nodes {
-                let x = problem.mesh.nodes[n as usize];
-                let d = [
-                    x[0] - rot.point[0],
-                    x[1] - rot.point[1],
-                    x[2] - rot.point[2],
-                ];
-                for k in 0..3 {
-                    let m = (rot_base + 9 * r + 3 * k) as u32;
-                    dof_slot[3 * n as usize + k] = imposed.len() as u32;
-                    imposed.push(vec![
-                        (d[0], m),
-                        (d[1], m + 1),
-                        (d[2], m + 2),
-                        (-d[k], ROW_ONE),
-                    ]);
-                }
-            }
-        }
-        // CSR: offsets (num_imposed + 1), then the row index of every term; coefficients apart
-        let mut imp_key: Vec<u32> = Vec::with_capacity(imposed.len() + 1);
-        imp_key.push(0);
-        for terms in &imposed {
-            imp_key.push(imp_key.last().unwrap() + terms.len() as u32);
-        }
-        imp_key.extend(imposed.iter().flatten().map(|&(_, i)| i));
-        let mut imp_coef: Vec<f64> = imposed.iter().flatten().map(|&(v, _)| v).collect();
-        if imp_coef.is_empty() {
-            imp_coef.push(0.0); // never read; a binding holds at least one element
-        }
-        let sp = &disc.saliva;
-        let ns = sp.elements.len();
-        // [saliva index per element (NO_SALIVA if none) | group, rule per saliva element]
-        let mut sal_meta = vec![NO_SALIVA; ne];
-        for (k, &e) in sp.elements.iter().enumerate() {
-            if sal_meta[e as usize] != NO_SALIVA {
-                return Err(Error::Gpu(format!(
-                    "element {e} is listed twice among the saliva elements"
-                )));
-            }
-            sal_meta[e as usize] = k as u32;
-        }
-        for k in 0..ns {
-            let g = sp.group[k];
-            let rule = match sp.groups[g as usize].rule {
-                BreakingRule::Literal => RULE_LITERAL,
-                BreakingRule::Latched => RULE_LATCHED,
-            };
-            sal_meta.extend([g, rule]);
-        }
-        // [unit axis across per saliva element (3) | decay factor per group]
-        let mut sal_const: Vec<T> = sp
-            .across
-            .iter()
-            .flatten()
-            .map(|&x| T::from_f64(x))
-            .collect();
-        sal_const.extend(sp.decay_factor.iter().map(|&f| T::from_f64(f)));
-        let saliva = SalivaState::<T>::new(sp);
-        // initial saliva state: no previous force, Q = 1, intact, never broken
-        let sal_real0: Vec<T> = (0..ns)
-            .flat_map(|_| {
-                let mut v = [T::ZERO; 25];
-                v[24] = T::ONE;
-                v
+        let packed = pack::pack(problem, &disc, &el, &cd)?;
+        let (wg_e, wg_n) = buffers::check_limits(&ctx, &packed, real)?;
+        let bufs = buffers::upload(&ctx, &packed, real)?;
+        // bind group g serves step s with g = s % 6 (element kernel: displacement rotation
+        // g % 3 and saliva parity g % 2) or g = s % 3 (node kernel)
+        let kernel = |kernel, entry, groups, workgroups| -> Result<Kernels> {
+            let (pipeline, groups) =
+                bindings::build_kernel(&ctx, kernel, entry, real, groups, |g, name| {
+                    bufs.by_name(name, g)
+                })?;
+            Ok(Kernels {
+                pipeline,
+                groups,
+                workgroups,
             })
-            .collect();
-
-        let stride = ns.max(1);
-        let params = Params {
-            num_elements: ne as u32,
-            num_nodes: nn as u32,
-            num_saliva: ns as u32,
-            num_imposed: imposed.len() as u32,
-            row_stride: row_stride as u32,
-            table_stride: stride as u32,
-            _pad0: 0,
-            _pad1: 0,
         };
-        let step_stride = (ctx.limits.min_uniform_buffer_offset_alignment as u64)
-            .max(std::mem::size_of::<StepInfo>() as u64);
-
-        // ---- limits: refuse what the adapter cannot bind rather than fail inside wgpu
-        let max_bind = ctx.limits.max_storage_buffer_binding_size;
-        let biggest = [
-            (gamma.len() * std::mem::size_of::<T>(), "hourglass vectors"),
-            (
-                dhdx.len() * std::mem::size_of::<T>(),
-                "element force blocks",
-            ),
-            (MAX_BATCH * row_stride * real.load_size(), "per-step rows"),
-            (imp_key.len() * 4, "imposed-value terms"),
-            (gather.len() * 4, "gather lists"),
-        ];
-        for (bytes, what) in biggest {
-            if bytes as u64 > max_bind.min(ctx.limits.max_buffer_size) {
-                return Err(Error::Gpu(format!(
-                    "the model is too large for {}: its {what} take {bytes} bytes, the adapter binds at most {max_bind}",
-                    ctx.describe()
-                )));
-            }
-        }
-        let wg = |n: usize| -> Result<u32> {
-            let g = (n as u64).div_ceil(WORKGROUP_SIZE as u64).max(1);
-            if g > ctx.limits.max_compute_workgroups_per_dimension as u64 {
-                return Err(Error::Gpu(format!(
-                    "{n} work items exceed the adapter's {} workgroups of {WORKGROUP_SIZE}",
-                    ctx.limits.max_compute_workgroups_per_dimension
-                )));
-            }
-            Ok(g as u32)
-        };
-        let (wg_e, wg_n) = (wg(ne)?, wg(nn)?);
-
-        let bufs = ctx.scoped("uploading the model", || {
-            let storage = |label: &str, bytes: Vec<u8>, extra: wgpu::BufferUsages| {
-                d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents: &bytes,
-                    usage: wgpu::BufferUsages::STORAGE | extra,
-                })
-            };
-            let none = wgpu::BufferUsages::empty();
-            let rw = wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
-            let zeros = vec![T::ZERO; 3 * nn];
-            let u_bufs = [
-                storage("u0", bytes_of_slice(&zeros), rw),
-                storage("u1", bytes_of_slice(&zeros), rw),
-                storage("u2", bytes_of_slice(&zeros), rw),
-            ];
-            let params_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("params"),
-                contents: bytemuck::bytes_of(&params),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-            let step_info = d.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("step info"),
-                size: step_stride * MAX_BATCH as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let table = storage(
-                "per-step saliva rows",
-                bytes_of_slice(&vec![T::ZERO; MAX_BATCH * stride]),
-                wgpu::BufferUsages::COPY_DST,
-            );
-            (
-                u_bufs,
-                params_buf,
-                step_info,
-                table,
-                storage("conn", bytes_of_slice(&conn), none),
-                storage("dhdx", bytes_of_slice(&dhdx), none),
-                storage("gamma", bytes_of_slice(&gamma), none),
-                storage("escal", bytes_of_slice(&escal), none),
-                storage("elem_f", bytes_of_slice(&vec![T::ZERO; 24 * ne]), none),
-                storage("status", bytes_of_slice(&[Status::OK]), rw),
-                storage("gather", bytes_of_slice(&gather), none),
-                storage("node_a", bytes_of_slice(&node_a), none),
-                storage("load_key", bytes_of_slice(&load_key), none),
-                storage("load_val", load_bytes(&load_val, real), none),
-                storage(
-                    "per-step rows",
-                    load_bytes(&vec![0.0; MAX_BATCH * row_stride], real),
-                    wgpu::BufferUsages::COPY_DST,
-                ),
-                storage("dof_slot", bytes_of_slice(&dof_slot), none),
-                storage("imp_key", bytes_of_slice(&imp_key), none),
-                storage("imp_coef", load_bytes(&imp_coef, real), none),
-                [
-                    storage("sal_meta", bytes_of_slice(&sal_meta), none),
-                    storage("sal_const", bytes_of_slice(&sal_const), none),
-                    storage("sal_real0", bytes_of_slice(&sal_real0), rw),
-                    storage("sal_real1", bytes_of_slice(&sal_real0), rw),
-                    storage("sal_state0", bytes_of_slice(&[0u32, NEVER].repeat(ns)), rw),
-                    storage("sal_state1", bytes_of_slice(&[0u32, NEVER].repeat(ns)), rw),
-                ],
-            )
-        })?;
-        let (
-            u_bufs,
-            params_buf,
-            step_info,
-            table,
-            conn_b,
-            dhdx_b,
-            gamma_b,
-            escal_b,
-            elem_f,
-            status,
-            gather_b,
-            node_a_b,
-            load_key_b,
-            load_val_b,
-            step_row,
-            dof_slot_b,
-            imp_key_b,
-            imp_coef_b,
-            sal,
-        ) = bufs;
-        let [sal_meta_b, sal_const_b, sal_real0, sal_real1, sal_state0, sal_state1] = sal;
-        let sal_real = [sal_real0, sal_real1];
-        let sal_state = [sal_state0, sal_state1];
-        use Bind::*;
-        let rot = |r: usize| (&u_bufs[r], &u_bufs[(r + 2) % 3], &u_bufs[(r + 1) % 3]);
-        // bind group g = s % 6: displacement rotation g % 3, saliva parity g % 2
-        let (pe, ge) = build_kernel(
-            &ctx,
-            Kernel::ElementForces,
-            "element_forces",
-            real,
-            &[
-                Uniform, UniformDyn, Read, Read, Read, Read, Read, ReadWrite, ReadWrite, Read,
-                Read, Read, Read, ReadWrite, Read, ReadWrite,
-            ],
-            &(0..6)
-                .map(|g| {
-                    let p = g % 2;
-                    vec![
-                        &params_buf,
-                        &step_info,
-                        rot(g % 3).0,
-                        &conn_b,
-                        &dhdx_b,
-                        &gamma_b,
-                        &escal_b,
-                        &elem_f,
-                        &status,
-                        &table,
-                        &sal_meta_b,
-                        &sal_const_b,
-                        &sal_real[p],
-                        &sal_real[1 - p],
-                        &sal_state[p],
-                        &sal_state[1 - p],
-                    ]
-                })
-                .collect::<Vec<_>>(),
-        )?;
-        let (pn, gn) = build_kernel(
-            &ctx,
-            Kernel::NodeUpdate,
-            "node_update",
-            real,
-            &[
-                Uniform, UniformDyn, Read, Read, ReadWrite, Read, Read, Read, Read, Read, Read,
-                Read, Read, Read, ReadWrite,
-            ],
-            &three(|r| {
-                let (u, up, un) = rot(r);
-                vec![
-                    &params_buf,
-                    &step_info,
-                    u,
-                    up,
-                    un,
-                    &elem_f,
-                    &gather_b,
-                    &node_a_b,
-                    &load_key_b,
-                    &load_val_b,
-                    &step_row,
-                    &dof_slot_b,
-                    &imp_key_b,
-                    &imp_coef_b,
-                    &status,
-                ]
-            }),
-        )?;
+        let element = kernel(Kernel::ElementForces, "element_forces", 6, wg_e)?;
+        let node = kernel(Kernel::NodeUpdate, "node_update", 3, wg_n)?;
+        let saliva = SalivaState::<T>::new(&disc.saliva);
         Ok(GpuSimulation {
             el,
-            element: Kernels {
-                pipeline: pe,
-                groups: ge,
-                workgroups: wg_e,
-            },
-            node: Kernels {
-                pipeline: pn,
-                groups: gn,
-                workgroups: wg_n,
-            },
-            u_bufs,
-            table,
-            step_row,
-            step_info,
-            status,
-            sal_real,
-            sal_state,
-            step_stride,
+            element,
+            node,
+            bufs,
             real,
-            params,
+            params: packed.params,
             step: 0,
             num_steps: problem.num_steps(),
             dt: problem.time.dt,
@@ -770,24 +247,7 @@ impl<T: GpuReal> GpuSimulation<T> {
     /// `Simulation::assemble_external` applies them at iteration `s` (`solver::load_value`),
     /// prescribed curves and rotation matrices at `t_{s+1}` as `apply_constraints` does.
     fn fill_step_row(&self, s: usize, row: &mut [f64]) {
-        let (tn, clamp_n) = constraint_time(s + 1, self.dt, self.niftysim_timing);
-        let c = &self.disc.constraints;
-        let mut i = 0;
-        let mut put = |v: f64| {
-            row[i] = v;
-            i += 1;
-        };
-        put(1.0);
-        for grp in &self.disc.loads {
-            put(load_value(&grp.curve, s, self.dt, self.niftysim_timing));
-        }
-        for (curve, _) in &c.prescribed {
-            put(curve.value(tn, clamp_n));
-        }
-        for r in &c.rotations {
-            r.matrix(tn, clamp_n).iter().flatten().for_each(|&m| put(m));
-        }
-        debug_assert_eq!(i, row.len());
+        pack::fill_step_row(&self.disc, s, self.dt, self.niftysim_timing, row);
     }
 
     /// The saliva row of step `s`: the breaking point of every saliva element at `t_s`
@@ -841,7 +301,7 @@ impl<T: GpuReal> GpuSimulation<T> {
         rows.clear();
         rows.resize(n * rs, 0.0);
         info.clear();
-        info.resize(n * self.step_stride as usize, 0);
+        info.resize(n * self.bufs.step_stride as usize, 0);
         let mut evaporated = vec![0.0; self.disc.saliva.groups.len()];
         for j in 0..n {
             let s = self.step + j;
@@ -853,7 +313,7 @@ impl<T: GpuReal> GpuSimulation<T> {
                 _pad0: 0,
                 _pad1: 0,
             };
-            let o = j * self.step_stride as usize;
+            let o = j * self.bufs.step_stride as usize;
             info[o..o + std::mem::size_of::<StepInfo>()].copy_from_slice(bytemuck::bytes_of(&si));
         }
     }
@@ -868,7 +328,7 @@ impl<T: GpuReal> GpuSimulation<T> {
             });
             for j in 0..n {
                 let s = self.step + j;
-                let off = [(j as u64 * self.step_stride) as u32];
+                let off = [(j as u64 * self.bufs.step_stride) as u32];
                 for k in [&self.element, &self.node] {
                     pass.set_pipeline(&k.pipeline);
                     pass.set_bind_group(0, k.group(s), &off);
@@ -897,9 +357,9 @@ impl<T: GpuReal> GpuSimulation<T> {
         let (mut table, mut rows, mut info) = (Vec::new(), Vec::new(), Vec::new());
         self.fill_rows(n, &mut table, &mut rows, &mut info);
         let q = &self.ctx.queue;
-        q.write_buffer(&self.table, 0, bytemuck::cast_slice(&table));
-        q.write_buffer(&self.step_row, 0, &load_bytes(&rows, self.real));
-        q.write_buffer(&self.step_info, 0, &info);
+        q.write_buffer(&self.bufs.table, 0, bytemuck::cast_slice(&table));
+        q.write_buffer(&self.bufs.step_row, 0, &load_bytes(&rows, self.real));
+        q.write_buffer(&self.bufs.step_info, 0, &info);
         let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("status read back"),
             size: std::mem::size_of::<Status>() as u64,
@@ -908,7 +368,7 @@ impl<T: GpuReal> GpuSimulation<T> {
         });
         let mut enc = self.encode_steps(n);
         enc.copy_buffer_to_buffer(
-            &self.status,
+            &self.bufs.status,
             0,
             &staging,
             0,
@@ -972,9 +432,9 @@ impl<T: GpuReal> GpuSimulation<T> {
             _pad1: 0,
         };
         let q = &self.ctx.queue;
-        q.write_buffer(&self.table, 0, bytemuck::cast_slice(&table));
-        q.write_buffer(&self.step_row, 0, &load_bytes(&rows, self.real));
-        q.write_buffer(&self.step_info, 0, bytemuck::bytes_of(&si));
+        q.write_buffer(&self.bufs.table, 0, bytemuck::cast_slice(&table));
+        q.write_buffer(&self.bufs.step_row, 0, &load_bytes(&rows, self.real));
+        q.write_buffer(&self.bufs.step_info, 0, bytemuck::bytes_of(&si));
         let k = match stage {
             Stage::ElementForces => &self.element,
             Stage::NodeUpdate => &self.node,
@@ -1010,10 +470,10 @@ impl<T: GpuReal> GpuSimulation<T> {
         let mut out = read_buffers(
             &self.ctx,
             &[
-                &self.u_bufs[s % 3],
-                &self.u_bufs[(s + 2) % 3],
-                &self.sal_real[s % 2],
-                &self.sal_state[s % 2],
+                &self.bufs.u[s % 3],
+                &self.bufs.u[(s + 2) % 3],
+                &self.bufs.sal_real[s % 2],
+                &self.bufs.sal_state[s % 2],
             ],
         )?;
         let nn = self.disc.num_nodes;
@@ -1082,9 +542,9 @@ impl<T: GpuReal> GpuSimulation<T> {
             |v: &[[f64; 3]]| -> Vec<T> { v.iter().flatten().map(|&x| T::from_f64(x)).collect() };
         self.ctx
             .queue
-            .write_buffer(&self.u_bufs[s % 3], 0, bytemuck::cast_slice(&flat(u)));
+            .write_buffer(&self.bufs.u[s % 3], 0, bytemuck::cast_slice(&flat(u)));
         self.ctx.queue.write_buffer(
-            &self.u_bufs[(s + 2) % 3],
+            &self.bufs.u[(s + 2) % 3],
             0,
             bytemuck::cast_slice(&flat(u_prev)),
         );
@@ -1161,13 +621,18 @@ pub fn run_function_test<T: GpuReal>(
         });
         (inp, out, count)
     })?;
-    let (pipeline, groups) = build_kernel(
+    let (pipeline, groups) = bindings::build_kernel(
         ctx,
         Kernel::FunctionTests,
         entry,
         real,
-        &[Bind::Read, Bind::ReadWrite, Bind::Uniform],
-        &[vec![&inp, &out, &count]],
+        1,
+        |_, name| match name {
+            "input" => Some(&inp),
+            "output" => Some(&out),
+            "count" => Some(&count),
+            _ => None,
+        },
     )?;
     let mut enc = d.create_command_encoder(&Default::default());
     {
