@@ -344,3 +344,156 @@ fn unstable_time_step_is_refused_and_a_forced_run_stops_cleanly() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The malformed inputs of the reliability issue that used to crash, run forever or run on
+/// nonsense: each is refused, before anything large is allocated, with the file and field.
+#[test]
+fn oversized_endless_and_non_finite_inputs_are_refused() {
+    let mouth = |extra: &str| {
+        format!(
+            "[mesh]\ngenerator = \"mouth\"\n[mesh.mouth]\n{extra}\n\n[[materials]]\nname = \"t\"\nmu = 800.0\nK = 7000.0\ndensity = 1050.0\n\n[time]\ndt = 1e-5\ntotal = 1e-3\n"
+        )
+    };
+    let cases: Vec<(String, &str)> = vec![
+        // a model far larger than any machine's memory, and one that overflows the counts
+        (
+            GOOD_TOML.replace("cells = [2, 2, 2]", "cells = [1000000000, 1000, 1000]"),
+            "field `mesh.cells`: gives 1000000000000000 hexahedra",
+        ),
+        (
+            GOOD_TOML.replace("cells = [2, 2, 2]", "cells = [9223372036854775807, 2, 2]"),
+            "fewer than 2^32",
+        ),
+        (
+            GOOD_TOML.replace("cells = [2, 2, 2]", "cells = [1500, 1500, 1500]"),
+            "available",
+        ),
+        (
+            mouth("resolution = 55000.0"),
+            "field `mesh.mouth.resolution`",
+        ),
+        (
+            mouth("mouth_width = -1.0"),
+            "field `mesh.mouth.mouth_width`",
+        ),
+        // a run that would never end, one that would not start, too many frames
+        (
+            GOOD_TOML.replace("dt = 1e-4", "dt = 1e-300"),
+            "a run may take at most 1000000000",
+        ),
+        (
+            GOOD_TOML.replace("total = 0.01", "total = 1e-5"),
+            "the run would take no step",
+        ),
+        (
+            GOOD_TOML.replace("dt = 1e-4", "dt = 1e-8\noutput_every = 1"),
+            "a run may write at most 100000",
+        ),
+        // non-finite numbers (TOML has nan and inf)
+        (
+            GOOD_TOML.replace("value = 0.001", "value = nan"),
+            "field `displacement[0].value`: NaN is not a finite number",
+        ),
+        (
+            GOOD_TOML.replace("size = [0.01, 0.01, 0.01]", "size = [0.01, inf, 0.01]"),
+            "field `mesh.size[1]`: inf is not a finite number",
+        ),
+        // a mesh file that is not there: the scenario and the field are named too
+        (
+            GOOD_TOML.replace(
+                "generator = \"block\"",
+                "generator = \"niftysim\"\nfile = \"no-such-model.xml\"",
+            ),
+            "field `mesh.file`: no-such-model.xml",
+        ),
+    ];
+    for (text, want) in cases {
+        let e = toml_err(&text);
+        assert!(
+            e.starts_with("case.toml") && e.contains(want),
+            "expected `{want}`, got: {e}"
+        );
+    }
+}
+
+/// The command line refuses `--threads 0`, a non-finite blend weight, a blend shape with a
+/// non-finite displacement and an extrusion thickness that is a unit mistake.
+#[test]
+fn command_line_values_are_checked() {
+    use std::process::Command;
+    let bin = env!("CARGO_BIN_EXE_sticky-lips");
+    let dir = std::env::temp_dir().join(format!("sticky-lips-cli-values-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let case = dir.join("case.toml");
+    std::fs::write(&case, GOOD_TOML).unwrap();
+    let fails = |args: &[&str], want: &str| {
+        let o = Command::new(bin).args(args).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(
+            o.status.code(),
+            Some(if want.starts_with("error: invalid value") {
+                2
+            } else {
+                1
+            }),
+            "{args:?}: {err}"
+        );
+        assert!(
+            err.contains(want),
+            "{args:?}: expected `{want}`, got: {err}"
+        );
+    };
+    let c = case.to_str().unwrap();
+    fails(
+        &[
+            "run",
+            c,
+            "--threads",
+            "0",
+            "--out",
+            dir.join("o").to_str().unwrap(),
+        ],
+        "error: invalid value '0' for '--threads",
+    );
+    // a shape to blend: the run's own final frame, then the same frame with a NaN in it
+    let run = dir.join("run");
+    let o = Command::new(bin)
+        .args(["run", c, "--quiet", "--out", run.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let fin = run.join("final.vtu");
+    let blend_out = dir.join("blend");
+    fails(
+        &[
+            "blend",
+            c,
+            "--shape",
+            &format!("{}=nan", fin.display()),
+            "--out",
+            blend_out.to_str().unwrap(),
+        ],
+        "`nan` is not a weight",
+    );
+    assert!(!blend_out.join("frames.pvd").exists());
+    // a surface 1 cm across extruded by 1e300 m
+    let obj = dir.join("square.obj");
+    std::fs::write(
+        &obj,
+        "v 0 0 0\nv 0.01 0 0\nv 0.01 0.01 0\nv 0 0.01 0\nf 1 2 3 4\n",
+    )
+    .unwrap();
+    fails(
+        &[
+            "extrude",
+            obj.to_str().unwrap(),
+            "--thickness",
+            "1e300",
+            "--out",
+            dir.join("ext").to_str().unwrap(),
+        ],
+        "more than 1000 times the surface's size",
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -490,6 +490,15 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
         let msg = e.message().to_string();
         Error::input(f, line_of(text, e.span()), msg)
     })?;
+    if let Ok(table) = toml::from_str::<toml::Table>(text) {
+        if let Some((field, v)) = first_non_finite(&table, "") {
+            return Err(Error::field(
+                f,
+                field,
+                format!("{v} is not a finite number"),
+            ));
+        }
+    }
     let base = path.parent().unwrap_or(Path::new("."));
     let scale = sf.units.length.unwrap_or_default().metres();
     let (mut mesh, anatomy) = build_mesh(&sf.mesh, f, base, scale)?;
@@ -535,6 +544,30 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
     })
 }
 
+/// The first `nan` or `inf` in the file (TOML allows both), with its key path
+/// (`displacement[0].value`), in the file's order of tables and keys.
+fn first_non_finite(table: &toml::Table, prefix: &str) -> Option<(String, f64)> {
+    fn walk(v: &toml::Value, path: String) -> Option<(String, f64)> {
+        match v {
+            toml::Value::Float(x) if !x.is_finite() => Some((path, *x)),
+            toml::Value::Array(a) => a
+                .iter()
+                .enumerate()
+                .find_map(|(i, v)| walk(v, format!("{path}[{i}]"))),
+            toml::Value::Table(t) => first_non_finite(t, &path),
+            _ => None,
+        }
+    }
+    table.iter().find_map(|(k, v)| {
+        let path = if prefix.is_empty() {
+            k.clone()
+        } else {
+            format!("{prefix}.{k}")
+        };
+        walk(v, path)
+    })
+}
+
 /// `[mesh]`: the mesh of the generator, in metres, with the element set `all`; for mouth
 /// models also their anatomy (jaw, skull, muscles, lip columns).
 fn build_mesh(
@@ -560,6 +593,8 @@ fn build_mesh(
                     "every count must be at least 1",
                 ));
             }
+            let (nodes, elements) = crate::mesh::budget::block_counts(cells);
+            crate::mesh::budget::check(f, "mesh.cells", nodes, elements)?;
             let size = sc3(need(m.size, "size")?);
             if size.iter().any(|&s| !(s > 0.0)) {
                 return Err(Error::field(f, "mesh.size", "every edge must be positive"));
@@ -597,6 +632,9 @@ fn build_mesh(
             if layers.is_empty() {
                 return Err(Error::field(f, "mesh.layers", "at least one layer"));
             }
+            let nz = layers.iter().fold(0usize, |n, l| n.saturating_add(l.cells));
+            let (nodes, elements) = crate::mesh::budget::block_counts([cells[0], cells[1], nz]);
+            crate::mesh::budget::check(f, "mesh.cells", nodes, elements)?;
             let mut scaled = layers.clone();
             for (i, l) in scaled.iter_mut().enumerate() {
                 if !(l.thickness > 0.0) || l.cells == 0 {
@@ -617,6 +655,7 @@ fn build_mesh(
         }
         Generator::Mouth => {
             let params = m.mouth.clone().unwrap_or_default();
+            params.validate(f, "mesh.mouth.")?;
             let model = crate::mesh::mouth::generate(&params)?;
             anatomy = Some(model.anatomy());
             model.mesh
@@ -624,7 +663,7 @@ fn build_mesh(
         Generator::Face => {
             use crate::mesh::face;
             let src = match &m.file {
-                Some(rel) => face::read_dir(&base.join(rel))?,
+                Some(rel) => face::read_dir(&base.join(rel)).map_err(|e| in_mesh_file(f, e))?,
                 None => face::makehuman()?,
             };
             let params = m.face.clone().unwrap_or_default();
@@ -638,7 +677,8 @@ fn build_mesh(
                 Error::field(f, "mesh.file", "required by the niftysim generator")
             })?;
             let p =
-                crate::io::niftysim::read(&base.join(rel), GradientVariant::MeanGradient, false)?;
+                crate::io::niftysim::read(&base.join(rel), GradientVariant::MeanGradient, false)
+                    .map_err(|e| in_mesh_file(f, e))?;
             let mut mesh = p.mesh;
             for n in mesh.nodes.iter_mut() {
                 *n = sc3(*n);
@@ -656,6 +696,15 @@ fn build_mesh(
         .entry("all".into())
         .or_insert_with(|| (0..mesh.elements.len() as u32).collect());
     Ok((mesh, anatomy))
+}
+
+/// A file named by `mesh.file` that cannot be read: the error names the scenario and the
+/// field too (an error inside the file, naming its own line, is kept as it is).
+fn in_mesh_file(f: &str, e: Error) -> Error {
+    match e {
+        Error::Io { .. } => Error::field(f, "mesh.file", e.to_string()),
+        other => other,
+    }
 }
 
 /// `[[node_sets]]`: each set by index list or box (in the file's length unit).

@@ -80,6 +80,24 @@ pub fn quad_area_vector(x: [&[f64; 3]; 4]) -> [f64; 3] {
 /// [`extrude`]'s `thickness` argument (`&|g| t[g]`). Errors: an override naming no group
 /// (the message lists the groups), a group left without a thickness, a thickness that is
 /// not positive and finite.
+/// The diagonal of the surface's bounding box (m).
+fn surface_size(s: &QuadSurface) -> f64 {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for v in &s.vertices {
+        for k in 0..3 {
+            lo[k] = lo[k].min(v[k]);
+            hi[k] = hi[k].max(v[k]);
+        }
+    }
+    let d: f64 = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
+    if d.is_finite() {
+        d
+    } else {
+        0.0
+    }
+}
+
 pub fn group_thickness(
     surface: &QuadSurface,
     default: Option<f64>,
@@ -102,11 +120,21 @@ pub fn group_thickness(
             }
         }
     }
+    // a layer far thicker than the surface is large is a unit mistake, not a model
+    let size = surface_size(surface);
+    let most = 1e3 * size;
     surface
         .groups
         .iter()
         .zip(t)
         .map(|(name, v)| match v {
+            Some(v) if v.is_finite() && v > 0.0 && v > most && size > 0.0 => Err(Error::input(
+                file,
+                Location::Field(format!("thickness of group `{name}`")),
+                format!(
+                    "thickness {v} m is more than 1000 times the surface's size ({size:.3e} m, its bounding box diagonal): check the unit"
+                ),
+            )),
             Some(v) if v.is_finite() && v > 0.0 => Ok(v),
             Some(v) => Err(Error::input(
                 file,

@@ -1,6 +1,7 @@
 //! Hexahedral meshes: geometry, named sets, topology and validation.
 
 pub mod anatomy;
+pub mod budget;
 pub mod extrude;
 pub mod face;
 pub mod generate;

@@ -193,9 +193,11 @@ impl MouthGrid {
 }
 
 impl MouthParams {
-    /// Checks the parameters; errors name the field.
-    pub fn validate(&self, file: &str) -> Result<()> {
-        let err = |field: &str, msg: String| Err(Error::field(file, field, msg));
+    /// Checks the parameters; errors name `file` and the field, as `prefix` + its name
+    /// (`mesh.mouth.` in a scenario).
+    pub fn validate(&self, file: &str, prefix: &str) -> Result<()> {
+        let err =
+            |field: &str, msg: String| Err(Error::field(file, format!("{prefix}{field}"), msg));
         let positive = [
             ("mouth_width", self.mouth_width),
             ("face_width", self.face_width),
@@ -266,17 +268,13 @@ impl MouthParams {
                 ),
             );
         }
-        let g = self.grid();
-        if g.quads() > 200_000_000 {
-            return err(
-                "resolution",
-                format!(
-                    "{} gives {} hexahedra: too many",
-                    self.resolution,
-                    g.quads()
-                ),
-            );
-        }
+        // the model's size, in floats (no cast can saturate) and against the memory
+        let f = self.resolution.sqrt();
+        let (nodes, elements) = super::budget::extruded_grid_counts(
+            self.columns as f64 * f,
+            (self.rows_below + self.rows_above + 1) as f64 * f,
+        );
+        super::budget::check(file, &format!("{prefix}resolution"), nodes, elements)?;
         if !(self.lip_asymmetry.abs() < 0.8) {
             return err(
                 "lip_asymmetry",
@@ -555,7 +553,7 @@ pub fn muscle_anchors() -> [(&'static str, [f64; 2], [f64; 2]); 4] {
 /// texture coordinates `u = (x + W/2) / W`, `v = (y + height_below) / (height_above + height_below)`.
 pub fn generate_surface(p: &MouthParams) -> Result<QuadSurface> {
     const FILE: &str = "mouth parameters";
-    p.validate(FILE)?;
+    p.validate(FILE, "")?;
     let g = p.grid();
     let shape = Shape { p };
     let (nm, ns, rb, ra) = (g.mouth_columns, g.side_columns, g.rows_below, g.rows_above);

@@ -14,6 +14,13 @@ use crate::mesh::Mesh;
 use crate::muscle::Muscle;
 use boundary::BoundaryConditions;
 
+/// The most time steps a run may ask for: 10^9 (days of stepping on the smallest model; the
+/// paper's runs take 10^5). A larger count is refused by [`Problem::validate`].
+pub const MAX_STEPS: usize = 1_000_000_000;
+
+/// The most frames a run may write (each is a complete VTU file).
+pub const MAX_FRAMES: usize = 100_000;
+
 /// A material assigned to a set of elements.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MaterialSpec {
@@ -185,6 +192,40 @@ impl Problem {
         if self.time.output_every == 0 {
             return Err(Error::field(f, "output_every", "must be at least 1 step"));
         }
+        // the step and frame counts, from the floats (before any cast can saturate)
+        let steps = self.time.total_time / self.time.dt;
+        if !(steps >= 0.5) {
+            return Err(Error::field(
+                f,
+                "total_time",
+                format!(
+                    "total time {} s is shorter than half the time step {} s: the run would take no step",
+                    self.time.total_time, self.time.dt
+                ),
+            ));
+        }
+        if steps > MAX_STEPS as f64 {
+            return Err(Error::field(
+                f,
+                "dt",
+                format!(
+                    "{} s at a time step of {} s is {steps:.3e} steps; a run may take at most {MAX_STEPS}",
+                    self.time.total_time, self.time.dt
+                ),
+            ));
+        }
+        let frames = self.num_steps() / self.time.output_every + 1;
+        if frames > MAX_FRAMES {
+            return Err(Error::field(
+                f,
+                "output_every",
+                format!(
+                    "a frame every {} steps of {} is {frames} frames; a run may write at most {MAX_FRAMES}",
+                    self.time.output_every,
+                    self.num_steps()
+                ),
+            ));
+        }
         if !(self.numerics.damping.is_finite() && self.numerics.damping >= 0.0) {
             return Err(Error::field(
                 f,
@@ -219,8 +260,35 @@ impl Problem {
         for (i, c) in bc.fixed.iter().enumerate() {
             check_nodes(&format!("fix[{i}].nodes"), &c.nodes)?;
         }
+        let finite = |what: String, v: &[f64]| -> Result<()> {
+            match v.iter().find(|x| !x.is_finite()) {
+                Some(x) => Err(Error::field(f, what, format!("{x} is not a finite number"))),
+                None => Ok(()),
+            }
+        };
         for (i, c) in bc.displacements.iter().enumerate() {
             check_nodes(&format!("displacement[{i}].nodes"), &c.nodes)?;
+            finite(format!("displacement[{i}].value"), &c.values)?;
+        }
+        for (i, c) in bc.forces.iter().enumerate() {
+            finite(format!("force[{i}].value"), &c.values)?;
+        }
+        for (i, c) in bc.rotations.iter().enumerate() {
+            finite(format!("rotation[{i}].point"), &c.point)?;
+            finite(format!("rotation[{i}].angle"), &[c.angle])?;
+        }
+        for (i, g) in bc.gravity.iter().enumerate() {
+            finite(format!("gravity[{i}].acceleration"), &g.acceleration)?;
+        }
+        for c in bc
+            .displacements
+            .iter()
+            .map(|c| c.curve)
+            .chain(bc.rotations.iter().map(|c| c.curve))
+            .chain(bc.forces.iter().map(|c| c.curve))
+            .chain(bc.gravity.iter().map(|c| c.curve))
+        {
+            finite("start".into(), &[c.start])?;
         }
         for (i, c) in bc.rotations.iter().enumerate() {
             check_nodes(&format!("rotation[{i}].nodes"), &c.nodes)?;

@@ -92,7 +92,7 @@ enum Command {
         #[arg(long, value_enum, default_value = "cpu")]
         backend: BackendArg,
         /// Worker threads (results are bit-identical for any count).
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, default_value_t = 1, value_parser = threads_arg)]
         threads: usize,
         /// Run even if the time step exceeds the critical time step.
         #[arg(long)]
@@ -107,7 +107,7 @@ enum Command {
         input: InputArgs,
         #[arg(long)]
         out: Option<PathBuf>,
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, default_value_t = 1, value_parser = threads_arg)]
         threads: usize,
         /// Load steps.
         #[arg(long, default_value_t = 10)]
@@ -223,7 +223,7 @@ enum Command {
         /// Make only these figures (e.g. --only fig4 --only sweep) and only their runs.
         #[arg(long)]
         only: Vec<String>,
-        #[arg(long, default_value_t = 2)]
+        #[arg(long, default_value_t = 2, value_parser = threads_arg)]
         threads: usize,
         /// Where the runs step (see `run --backend`).
         #[arg(long, value_enum, default_value = "cpu")]
@@ -576,6 +576,15 @@ fn evaporation(
     Ok(())
 }
 
+/// `--threads N`: at least 1.
+fn threads_arg(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        Ok(_) => Err("the number of threads must be at least 1".into()),
+        Err(e) => Err(format!("`{s}` is not a thread count: {e}")),
+    }
+}
+
 fn blend(input: &InputArgs, shapes: &[String], out: &Path) -> sticky_lips::Result<()> {
     use sticky_lips::error::{Error, Location};
     let (p, _) = load(input)?;
@@ -589,9 +598,16 @@ fn blend(input: &InputArgs, shapes: &[String], out: &Path) -> sticky_lips::Resul
                 format!("`{spec}`: expected PATH.vtu=WEIGHT"),
             )
         })?;
-        let w: f64 = w.parse().map_err(|_| {
-            Error::input("--shape", Location::None, format!("`{w}` is not a weight"))
-        })?;
+        let w: f64 = match w.parse::<f64>() {
+            Ok(v) if v.is_finite() => v,
+            _ => {
+                return Err(Error::input(
+                    "--shape",
+                    Location::None,
+                    format!("`{w}` is not a weight (a finite number)"),
+                ))
+            }
+        };
         let (v, comps, points) =
             sticky_lips::io::vtu::read_point_data_f64(Path::new(path), "displacement")?;
         if comps != 3 || points != nn {
@@ -601,6 +617,13 @@ fn blend(input: &InputArgs, shapes: &[String], out: &Path) -> sticky_lips::Resul
                 format!(
                     "shape has {points} points x {comps} components; the model has {nn} nodes x 3"
                 ),
+            ));
+        }
+        if let Some(k) = v.iter().position(|x| !x.is_finite()) {
+            return Err(Error::input(
+                path,
+                Location::Field(format!("point data `displacement`, point {}", k / 3)),
+                format!("{} is not a finite number", v[k]),
             ));
         }
         let b: Vec<[f64; 3]> = v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();

@@ -166,18 +166,11 @@ impl FaceParams {
             ));
         }
         let f = self.resolution.sqrt();
-        let quads =
-            (self.columns as f64 * f) * ((self.rows_below + self.rows_above + 1) as f64 * f);
-        if !(quads <= 50_000_000.0) {
-            return Err(Error::field(
-                file,
-                field("resolution"),
-                format!(
-                    "{} gives about {quads:.3e} hexahedra: too many",
-                    self.resolution
-                ),
-            ));
-        }
+        let (nodes, elements) = crate::mesh::budget::extruded_grid_counts(
+            self.columns as f64 * f,
+            (self.rows_below + self.rows_above + 1) as f64 * f,
+        );
+        crate::mesh::budget::check(file, &field("resolution"), nodes, elements)?;
         if !(self.jaw_weight > 0.0 && self.jaw_weight <= 1.0) {
             return Err(Error::field(
                 file,

@@ -1,0 +1,129 @@
+//! What a model of a given size needs in memory, checked before it is built: a mesh
+//! generator asked for more than the machine can hold refuses with the field and the
+//! numbers instead of aborting on its first allocation.
+//!
+//! The estimate is the peak resident memory of a `run` in `f64` (mesh, discretisation, the
+//! stepping arrays, the stability analysis, the frame writer), measured on blocks of
+//! 64 000 and 216 000 hexahedra (150 MB and 512 MB, 2026-12-01) and fitted per element and
+//! per node. Indices are 32-bit, so no model may have 2^32 nodes or elements or more.
+
+use crate::error::{Error, Result};
+
+/// Bytes a run holds per hexahedron (fitted, see the module documentation).
+pub const BYTES_PER_ELEMENT: u128 = 1600;
+/// Bytes a run holds per node.
+pub const BYTES_PER_NODE: u128 = 700;
+
+/// The memory the kernel says is available (`MemAvailable` of `/proc/meminfo`), if known.
+pub fn available_bytes() -> Option<u128> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u128 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// The estimate for `nodes` nodes and `elements` hexahedra (bytes).
+pub fn estimate(nodes: u128, elements: u128) -> u128 {
+    nodes
+        .saturating_mul(BYTES_PER_NODE)
+        .saturating_add(elements.saturating_mul(BYTES_PER_ELEMENT))
+}
+
+fn gib(b: u128) -> String {
+    format!("{:.2} GiB", b as f64 / (1u128 << 30) as f64)
+}
+
+/// Refuses a model of `nodes` nodes and `elements` hexahedra (counts computed without
+/// overflow by the caller) that 32-bit indices cannot number or that would not fit in
+/// `available` bytes (`None`: not known, only the index limit is checked). `field` names
+/// what the user set (e.g. `mesh.cells`).
+pub fn check_with(
+    file: &str,
+    field: &str,
+    nodes: u128,
+    elements: u128,
+    available: Option<u128>,
+) -> Result<()> {
+    let limit = u32::MAX as u128;
+    if nodes >= limit || elements >= limit {
+        return Err(Error::field(
+            file,
+            field,
+            format!(
+                "gives {elements} hexahedra and {nodes} nodes; a model may have fewer than 2^32 of each"
+            ),
+        ));
+    }
+    let need = estimate(nodes, elements);
+    if let Some(have) = available {
+        if need > have {
+            return Err(Error::field(
+                file,
+                field,
+                format!(
+                    "gives {elements} hexahedra and {nodes} nodes, which need about {} to run; this machine has {} available",
+                    gib(need),
+                    gib(have)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// [`check_with`] against this machine's available memory.
+pub fn check(file: &str, field: &str, nodes: u128, elements: u128) -> Result<()> {
+    check_with(file, field, nodes, elements, available_bytes())
+}
+
+/// Nodes and hexahedra of a block of `cells`, without overflow.
+pub fn block_counts(cells: [usize; 3]) -> (u128, u128) {
+    let [x, y, z] = cells.map(|c| c as u128);
+    (
+        (x + 1).saturating_mul(y + 1).saturating_mul(z + 1),
+        x.saturating_mul(y).saturating_mul(z),
+    )
+}
+
+/// Nodes and hexahedra of a quad surface of `quads` quads on a grid of `columns` x `rows`
+/// quads, extruded into one layer (two layers of nodes).
+pub fn extruded_grid_counts(columns: f64, rows: f64) -> (u128, u128) {
+    let q = |x: f64| x.clamp(0.0, 1e30) as u128;
+    let (c, r) = (q(columns), q(rows));
+    (
+        2u128.saturating_mul((c + 1).saturating_mul(r + 1)),
+        c.saturating_mul(r),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_do_not_overflow() {
+        let (n, e) = block_counts([usize::MAX, 2, 2]);
+        assert!(n > u32::MAX as u128 && e > u32::MAX as u128);
+        assert_eq!(block_counts([2, 3, 4]), (60, 24));
+        assert_eq!(extruded_grid_counts(4.0, 2.0), (30, 8));
+    }
+
+    #[test]
+    fn refuses_what_does_not_fit_and_says_so() {
+        let have = Some(1u128 << 30);
+        check_with("f.toml", "mesh.cells", 1000, 1000, have).unwrap();
+        let e = check_with("f.toml", "mesh.cells", 1 << 20, 1 << 20, have)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("field `mesh.cells`") && e.contains("1.00 GiB available"),
+            "{e}"
+        );
+        let e = check_with("f.toml", "mesh.cells", 1 << 33, 1, None)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("fewer than 2^32"), "{e}");
+        // the index limit holds even where the available memory is not known
+        check_with("f.toml", "mesh.cells", 1 << 31, 1, None).unwrap();
+    }
+}
