@@ -105,6 +105,35 @@ pub struct RunSummary {
     pub broken_saliva: Vec<usize>,
     pub newton_iterations: Option<usize>,
     pub residual_norm: Option<f64>,
+    /// Where a run stopped by SIGINT or SIGTERM stopped (absent for a run that finished).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub interrupted: Option<Interruption>,
+}
+
+/// The step and time at which a run was interrupted.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct Interruption {
+    pub step: usize,
+    pub time: f64,
+}
+
+/// Set (by the command line's SIGINT/SIGTERM handler) to stop runs at the next check, at
+/// most [`INTERRUPT_CHECK_STEPS`] steps later.
+static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Steps between two looks at [`request_stop`]'s flag (the stepping is cut into pieces of
+/// at most this many steps; results do not depend on it).
+pub const INTERRUPT_CHECK_STEPS: usize = 512;
+
+/// Asks every run of this process to stop between two steps (safe from a signal-handling
+/// thread). A run that stops writes `summary.json` marked interrupted and returns
+/// [`crate::error::Error::Interrupted`].
+pub fn request_stop() {
+    STOP.store(true, std::sync::atomic::Ordering::SeqCst);
+}
+
+fn stop_requested() -> bool {
+    STOP.load(std::sync::atomic::Ordering::SeqCst)
 }
 
 fn pool(threads: usize) -> rayon::ThreadPool {
@@ -302,6 +331,22 @@ fn run_with<S: Stepper>(
             broken.push(broken_count);
         }
         let volume_ratio = volume_ratios(sim.disc(), &u);
+        // a state with an inverted element is not written as a frame: the run stops here
+        if let Some(e) = volume_ratio
+            .iter()
+            .position(|j| !(*j > 0.0 && j.is_finite()))
+        {
+            return Err(crate::error::Error::Diverged {
+                step: sim.step_index(),
+                time: sim.time(),
+                element: Some(e),
+                node: None,
+                reason: format!(
+                    "element inverted or degenerate (det F = {}) in the state to be written as a frame; not written",
+                    volume_ratio[e]
+                ),
+            });
+        }
         writer.frame(Frame {
             time: sim.time(),
             u,
@@ -315,11 +360,25 @@ fn run_with<S: Stepper>(
     let every = problem.time.output_every;
     let mut stepping = 0.0;
     let mut next_plain = n / 10;
+    let mut interrupted = None;
     while !sim.is_finished() {
+        if stop_requested() {
+            interrupted = Some(Interruption {
+                step: sim.step_index(),
+                time: sim.time(),
+            });
+            break;
+        }
         let ts = Instant::now();
-        let chunk = every - sim.step_index() % every;
-        sim.advance(chunk.min(n - sim.step_index()))?;
+        let to_frame = every - sim.step_index() % every;
+        let chunk = to_frame
+            .min(n - sim.step_index())
+            .min(INTERRUPT_CHECK_STEPS);
+        sim.advance(chunk)?;
         stepping += ts.elapsed().as_secs_f64();
+        if chunk < to_frame && !sim.is_finished() {
+            continue;
+        }
         record(&mut sim, &mut writer)?;
         if let Some(b) = &bar {
             b.set_position(sim.step_index() as u64);
@@ -356,9 +415,17 @@ fn run_with<S: Stepper>(
         energy,
         newton_iterations: None,
         residual_norm: None,
+        interrupted: interrupted.clone(),
     };
     if let Some(m) = &measures {
         write_measures(&opts.out, m)?;
+    }
+    if let Some(i) = interrupted {
+        writer.finish_interrupted(&summary)?;
+        return Err(crate::error::Error::Interrupted {
+            step: i.step,
+            time: i.time,
+        });
     }
     writer.finish(&summary)?;
     Ok(summary)
@@ -445,6 +512,7 @@ pub fn equilibrium(
             broken_saliva: Vec::new(),
             newton_iterations: Some(res.newton_iterations),
             residual_norm: Some(res.residual_norm),
+            interrupted: None,
         };
         writer.finish(&summary)?;
         Ok(summary)

@@ -41,6 +41,9 @@ pub enum Error {
         node: Option<usize>,
         reason: String,
     },
+    /// The run was stopped by SIGINT or SIGTERM between two steps; the frames written before
+    /// are complete and `summary.json` says where it stopped.
+    Interrupted { step: usize, time: f64 },
     /// The static solver did not converge.
     NotConverged(String),
     /// The GPU backend is unavailable or failed (no adapter, missing feature, shader or
@@ -103,6 +106,10 @@ impl fmt::Display for Error {
                 }
                 write!(f, ": {reason}")
             }
+            Error::Interrupted { step, time } => write!(
+                f,
+                "interrupted at step {step} (t = {time:.6e} s): the frames written so far are complete and listed in frames.pvd; summary.json is marked interrupted"
+            ),
             Error::NotConverged(m) => write!(f, "static solver did not converge: {m}"),
             Error::Gpu(m) => write!(f, "GPU backend: {m}"),
         }

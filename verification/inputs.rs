@@ -497,3 +497,78 @@ fn command_line_values_are_checked() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// SIGINT and SIGTERM stop a run between two steps: exit status 130, `summary.json` marked
+/// interrupted, every frame on disk complete and listed in `frames.pvd`, no temporary file,
+/// no `final.vtu`. A stale temporary file of an earlier killed run is removed.
+#[test]
+fn interrupted_runs_leave_complete_frames_and_say_where_they_stopped() {
+    use std::process::Command;
+    let bin = env!("CARGO_BIN_EXE_sticky-lips");
+    let dir = std::env::temp_dir().join(format!("sticky-lips-interrupt-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    // 1000 hexahedra for 10^6 steps: about a minute, far longer than the test waits
+    let case = dir.join("long.toml");
+    std::fs::write(
+        &case,
+        GOOD_TOML
+            .replace("cells = [2, 2, 2]", "cells = [10, 10, 10]")
+            .replace("total = 0.01", "total = 100.0\noutput_every = 2000"),
+    )
+    .unwrap();
+    for signal in ["INT", "TERM"] {
+        let out = dir.join(format!("out_{signal}"));
+        std::fs::create_dir_all(&out).unwrap();
+        std::fs::write(out.join(".frame_000007.vtu.tmp-999999"), b"half a frame").unwrap();
+        let child = Command::new(bin)
+            .args([
+                "run",
+                case.to_str().unwrap(),
+                "--quiet",
+                "--out",
+                out.to_str().unwrap(),
+            ])
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        // wait for the second frame, then signal
+        let t0 = std::time::Instant::now();
+        while !out.join("frame_000001.vtu").exists() {
+            assert!(t0.elapsed().as_secs() < 60, "no second frame within 60 s");
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        let kill = Command::new("kill")
+            .args([format!("-{signal}"), child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(kill.success());
+        let o = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(130), "SIG{signal}: {err}");
+        assert!(err.contains("interrupted at step"), "{err}");
+        let summary: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+        let step = summary["interrupted"]["step"].as_u64().unwrap();
+        assert!(step > 0 && step < 1_000_000, "{summary}");
+        assert_eq!(summary["steps"].as_u64(), Some(step));
+        let mut names: Vec<String> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        assert!(names.iter().all(|n| !n.contains(".tmp-")), "{names:?}");
+        assert!(!names.contains(&"final.vtu".to_string()));
+        let pvd = std::fs::read_to_string(out.join("frames.pvd")).unwrap();
+        let frames: Vec<&String> = names.iter().filter(|n| n.starts_with("frame_")).collect();
+        assert_eq!(pvd.matches("<DataSet").count(), frames.len(), "{pvd}");
+        assert_eq!(summary["frames"].as_u64(), Some(frames.len() as u64));
+        for f in frames {
+            assert!(pvd.contains(f.as_str()), "{f} not in frames.pvd");
+            let (_, comps, points) =
+                sticky_lips::io::vtu::read_point_data_f64(&out.join(f), "displacement").unwrap();
+            assert_eq!((comps, points), (3, 1331), "{f}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

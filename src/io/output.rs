@@ -88,10 +88,7 @@ impl FrameWriter {
         for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
             let entry = entry.map_err(|e| Error::io(dir, e))?;
             let name = entry.file_name().to_string_lossy().to_string();
-            let stale = (name.starts_with("frame_") && name.ends_with(".vtu"))
-                || name == "frames.pvd"
-                || name == "final.vtu"
-                || name == "summary.json";
+            let stale = is_ours(&name) || is_our_temporary(&name);
             if stale {
                 std::fs::remove_file(entry.path()).map_err(|e| Error::io(entry.path(), e))?;
             }
@@ -221,11 +218,42 @@ impl FrameWriter {
     }
 }
 
+impl FrameWriter {
+    /// Waits for the frames handed over, then writes `summary.json` only: an interrupted run
+    /// has no final state, so no `final.vtu`.
+    pub fn finish_interrupted<S: serde::Serialize>(mut self, summary: &S) -> Result<()> {
+        self.join()?;
+        let path = self.dir.join("summary.json");
+        let json = serde_json::to_vec_pretty(summary).expect("summary serialises");
+        write_atomic(&path, &json).map_err(|e| Error::io(&path, e))
+    }
+}
+
 impl Drop for FrameWriter {
     fn drop(&mut self) {
         // The frames handed over are written; an error is reported by frame() or finish().
         let _ = self.join();
     }
+}
+
+/// A file of a run's output that a new run into the same directory replaces.
+fn is_ours(name: &str) -> bool {
+    (name.starts_with("frame_") && name.ends_with(".vtu"))
+        || ["frames.pvd", "final.vtu", "summary.json"].contains(&name)
+}
+
+/// A temporary file of `io::atomic` (`.NAME.tmp-PID`) for one of our outputs, left behind by
+/// a run that was killed while writing it.
+fn is_our_temporary(name: &str) -> bool {
+    let Some(rest) = name.strip_prefix('.') else {
+        return false;
+    };
+    let Some((base, pid)) = rest.rsplit_once(".tmp-") else {
+        return false;
+    };
+    let ours = is_ours(base)
+        || ["measures.json", "gap.csv", "series.csv", "scenario.toml"].contains(&base);
+    ours && !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit())
 }
 
 /// Encodes one frame as a VTU file at `path` (atomically).
@@ -406,6 +434,39 @@ mod tests {
         };
         let text = e.to_string();
         assert!(text.contains("frame_00000"), "{text}");
+    }
+
+    #[test]
+    fn stale_temporaries_of_ours_are_recognised() {
+        for n in [
+            ".frame_000003.vtu.tmp-4242",
+            ".frames.pvd.tmp-7",
+            ".summary.json.tmp-1",
+        ] {
+            assert!(is_our_temporary(n), "{n}");
+        }
+        for n in [
+            ".frame_000003.vtu.tmp-",
+            ".notes.txt.tmp-12",
+            "frame_000003.vtu.tmp-1",
+            ".frames.pvd.tmp-x1",
+        ] {
+            assert!(!is_our_temporary(n), "{n}");
+        }
+        let d = scratch("stale");
+        std::fs::create_dir_all(&d).unwrap();
+        for n in [
+            ".frame_000009.vtu.tmp-99999",
+            ".frames.pvd.tmp-99999",
+            "notes.txt",
+        ] {
+            std::fs::write(d.join(n), b"x").unwrap();
+        }
+        let (x, el) = cube();
+        let w = FrameWriter::new(&d, &x, &el, &[0], &[]).unwrap();
+        drop(w);
+        assert_eq!(names(&d), ["notes.txt"]);
+        std::fs::remove_dir_all(&d).unwrap();
     }
 
     #[test]

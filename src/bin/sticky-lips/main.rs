@@ -296,10 +296,27 @@ fn out_dir(explicit: Option<PathBuf>, default: Option<PathBuf>, input: &Path) ->
     })
 }
 
+/// Exit status of a run stopped by SIGINT or SIGTERM (128 + SIGINT's number, as shells
+/// report an interrupted command).
+const EXIT_INTERRUPTED: u8 = 130;
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // SIGINT/SIGTERM: runs stop between steps, finish the frames handed to the writer and
+    // write summary.json marked interrupted; a second signal ends the process at once.
+    let _ = ctrlc::set_handler(|| {
+        static SEEN: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+        if SEEN.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            std::process::exit(EXIT_INTERRUPTED as i32);
+        }
+        sticky_lips::driver::request_stop();
+    });
     match real_main(cli) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e @ sticky_lips::Error::Interrupted { .. }) => {
+            eprintln!("{e}");
+            ExitCode::from(EXIT_INTERRUPTED)
+        }
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::FAILURE
