@@ -224,12 +224,12 @@ fn block_corner_forces<T: Real, const L: usize, W: Lanes<T, L>>(
     let d = |a: usize, j: usize| W::row(blk, 3 * a + j);
     let gamma = |a: usize, alpha: usize| W::row(blk, ROW_GAMMA + 4 * a + alpha);
     let w = W::row(blk, ROW_W);
-    // arrays built in place (no zero fill first: the compiler would call memset for it)
-    let P: M3<W> = std::array::from_fn(|i| {
-        std::array::from_fn(|j| {
-            w * (S[i][j] + H[i][0] * S[0][j] + H[i][1] * S[1][j] + H[i][2] * S[2][j])
-        })
-    });
+    let mut P = [[zero; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            P[i][j] = w * (S[i][j] + H[i][0] * S[0][j] + H[i][1] * S[1][j] + H[i][2] * S[2][j]);
+        }
+    }
     let mut hg = [[zero; 3]; 4];
     for (b, ub) in ue.iter().enumerate() {
         for (alpha, hga) in hg.iter_mut().enumerate() {
@@ -240,15 +240,17 @@ fn block_corner_forces<T: Real, const L: usize, W: Lanes<T, L>>(
         }
     }
     let k = W::row(blk, ROW_K);
-    std::array::from_fn(|a| {
+    let mut f = [[zero; 3]; 8];
+    for (a, fa) in f.iter_mut().enumerate() {
         let (d0, d1, d2) = (d(a, 0), d(a, 1), d(a, 2));
         let (g0, g1, g2, g3) = (gamma(a, 0), gamma(a, 1), gamma(a, 2), gamma(a, 3));
-        std::array::from_fn(|i| {
+        for i in 0..3 {
             let elastic = P[i][0] * d0 + P[i][1] * d1 + P[i][2] * d2;
             let hourglass = g0 * hg[0][i] + g1 * hg[1][i] + g2 * hg[2][i] + g3 * hg[3][i];
-            elastic + k * hourglass
-        })
-    })
+            fa[i] = elastic + k * hourglass;
+        }
+    }
+    f
 }
 
 /// Forces `f[a][i]` and `J` of one block: `element_force` lane by lane. `ue[a][i]` are
