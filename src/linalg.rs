@@ -129,3 +129,16 @@ pub fn rotation_matrix(axis: &[f64; 3], angle: f64) -> [[f64; 3]; 3] {
         [z * x * t - y * s, z * y * t + x * s, c + z * z * t],
     ]
 }
+
+/// Smallest and largest coordinate of `points` along each axis (`+inf`, `-inf` when empty).
+pub fn bounding_box<'a>(points: impl IntoIterator<Item = &'a [f64; 3]>) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for x in points {
+        for k in 0..3 {
+            lo[k] = lo[k].min(x[k]);
+            hi[k] = hi[k].max(x[k]);
+        }
+    }
+    (lo, hi)
+}

@@ -82,14 +82,7 @@ pub fn quad_area_vector(x: [&[f64; 3]; 4]) -> [f64; 3] {
 /// not positive and finite.
 /// The diagonal of the surface's bounding box (m).
 fn surface_size(s: &QuadSurface) -> f64 {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for v in &s.vertices {
-        for k in 0..3 {
-            lo[k] = lo[k].min(v[k]);
-            hi[k] = hi[k].max(v[k]);
-        }
-    }
+    let (lo, hi) = crate::linalg::bounding_box(&s.vertices);
     let d: f64 = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
     if d.is_finite() {
         d

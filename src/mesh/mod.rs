@@ -147,14 +147,7 @@ impl Mesh {
     }
 
     pub fn stats(&self) -> MeshStats {
-        let mut bmin = [f64::INFINITY; 3];
-        let mut bmax = [f64::NEG_INFINITY; 3];
-        for x in &self.nodes {
-            for i in 0..3 {
-                bmin[i] = bmin[i].min(x[i]);
-                bmax[i] = bmax[i].max(x[i]);
-            }
-        }
+        let (bmin, bmax) = crate::linalg::bounding_box(&self.nodes);
         let (mut vt, mut vmin, mut vmax, mut lmin, mut jr) =
             (0.0, f64::INFINITY, 0.0f64, f64::INFINITY, 1.0f64);
         for e in 0..self.elements.len() {
