@@ -2,6 +2,7 @@
 //! progress, summary. Used by the CLI (`sticky-lips run`, `equilibrium`) and by tests.
 
 use crate::error::Result;
+use crate::io::checkpoint::{self, RunHistory, SolverState};
 use crate::io::output::{Frame, FrameWriter, SalivaFrame};
 use crate::problem::Problem;
 use crate::real::{Precision, Real};
@@ -67,9 +68,29 @@ pub struct RunOptions {
     /// Run even if the time step exceeds the critical one.
     pub force_dt: bool,
     pub progress: Progress,
+    /// Write `checkpoint.bin` every this many steps (CPU backend; see `io::checkpoint`).
+    pub checkpoint_every: Option<usize>,
+    /// Continue the run whose output is in `out` from its `checkpoint.bin`.
+    pub restart: bool,
 }
 
-#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+impl RunOptions {
+    /// A quiet CPU run into `out` with `threads` threads, no checkpoints.
+    pub fn new(out: impl Into<PathBuf>, precision: Precision, threads: usize) -> Self {
+        RunOptions {
+            out: out.into(),
+            precision,
+            backend: Backend::Cpu,
+            threads,
+            force_dt: false,
+            progress: Progress::Quiet,
+            checkpoint_every: None,
+            restart: false,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct EnergySeries {
     pub time: Vec<f64>,
     pub kinetic: Vec<f64>,
@@ -108,6 +129,10 @@ pub struct RunSummary {
     /// Where a run stopped by SIGINT or SIGTERM stopped (absent for a run that finished).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub interrupted: Option<Interruption>,
+    /// The checkpoint step a restarted run continued from (absent for a run from the start);
+    /// `wall_time` is then the restarted process's, `stepping_time` all the stepping's.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub restarted_from: Option<usize>,
 }
 
 /// The step and time at which a run was interrupted.
@@ -160,9 +185,25 @@ pub trait Stepper {
     fn energies(&mut self) -> Result<Energies>;
     /// The saliva state of the last step (`None` without saliva elements).
     fn saliva_frame(&mut self) -> Result<Option<SalivaFrame>>;
+    /// The state a checkpoint holds; `None` where the backend does not write checkpoints.
+    fn checkpoint_state(&self) -> Option<SolverState> {
+        None
+    }
+    /// Continues from a checkpoint's state.
+    fn restore(&mut self, _state: &SolverState) -> Result<()> {
+        Err(no_checkpoints())
+    }
     fn is_finished(&self) -> bool {
         self.step_index() >= self.num_steps()
     }
+}
+
+fn no_checkpoints() -> crate::error::Error {
+    crate::error::Error::input(
+        "--checkpoint-every / --restart",
+        crate::error::Location::None,
+        "checkpoints are written and read by the CPU backend only (give --backend cpu)",
+    )
 }
 
 fn saliva_frame_of<T: Real>(s: &crate::tled::saliva_forces::SalivaState<T>) -> SalivaFrame {
@@ -211,6 +252,12 @@ impl<T: crate::tled::simd::SimdReal> Stepper for Simulation<T> {
     }
     fn saliva_frame(&mut self) -> Result<Option<SalivaFrame>> {
         Ok((!self.disc.saliva.elements.is_empty()).then(|| saliva_frame_of(self.saliva())))
+    }
+    fn checkpoint_state(&self) -> Option<SolverState> {
+        Some(Simulation::checkpoint_state(self))
+    }
+    fn restore(&mut self, state: &SolverState) -> Result<()> {
+        Simulation::restore(self, state)
     }
 }
 
@@ -300,86 +347,109 @@ fn run_with<S: Stepper>(
 ) -> Result<RunSummary> {
     let report = analyse(problem, sim.disc());
     check_time_step(problem, &report, opts.force_dt)?;
-    let mut writer = FrameWriter::new(
-        &opts.out,
-        &problem.mesh.nodes,
-        &problem.mesh.elements,
-        &problem.element_material,
-        &sim.disc().saliva.elements,
-    )?;
-    let mut energy = EnergySeries::default();
-    let mut broken = Vec::new();
-    let mut measures = problem
-        .physics
-        .lip_columns
-        .clone()
-        .map(|c| crate::measures::RunMeasures::new(c, crate::measures::OPEN_THRESHOLD));
-    let mut record = |sim: &mut S, writer: &mut FrameWriter| -> Result<()> {
-        let u = sim.displacement_f64()?;
-        let saliva = sim.saliva_frame()?;
-        let broken_count = saliva
-            .as_ref()
-            .map_or(0, |s| s.broken.iter().filter(|b| **b).count());
-        if let Some(m) = measures.as_mut() {
-            m.push(sim.time(), &problem.mesh.nodes, &u, broken_count);
-        }
-        let e = sim.energies()?;
-        energy.time.push(sim.time());
-        energy.kinetic.push(e.kinetic);
-        energy.strain.push(e.strain);
-        if saliva.is_some() {
-            broken.push(broken_count);
-        }
-        let volume_ratio = volume_ratios(sim.disc(), &u);
-        // a state with an inverted element is not written as a frame: the run stops here
-        if let Some(e) = volume_ratio
-            .iter()
-            .position(|j| !(*j > 0.0 && j.is_finite()))
-        {
-            return Err(crate::error::Error::Diverged {
-                step: sim.step_index(),
-                time: sim.time(),
-                element: Some(e),
-                node: None,
-                reason: format!(
-                    "element inverted or degenerate (det F = {}) in the state to be written as a frame; not written",
-                    volume_ratio[e]
-                ),
-            });
-        }
-        writer.frame(Frame {
-            time: sim.time(),
-            u,
-            volume_ratio,
-            saliva,
-        })
+    let checkpoint_every = opts.checkpoint_every.filter(|&n| n > 0);
+    if (checkpoint_every.is_some() || opts.restart) && sim.checkpoint_state().is_none() {
+        return Err(no_checkpoints());
+    }
+    let saliva_elements = sim.disc().saliva.elements.clone();
+    let (mut writer, mut history, restarted_from) = if opts.restart {
+        let path = opts.out.join(checkpoint::FILE_NAME);
+        let (header, state) = checkpoint::read(&path)?;
+        checkpoint::check_matches(&path, &header, problem, sim.precision_name())?;
+        sim.restore(&state)?;
+        let writer = FrameWriter::resume(
+            &opts.out,
+            &problem.mesh.nodes,
+            &problem.mesh.elements,
+            &problem.element_material,
+            &saliva_elements,
+            header.history.pvd_entries(),
+        )?;
+        (writer, header.history, Some(header.step))
+    } else {
+        let writer = FrameWriter::new(
+            &opts.out,
+            &problem.mesh.nodes,
+            &problem.mesh.elements,
+            &problem.element_material,
+            &saliva_elements,
+        )?;
+        let history = RunHistory {
+            measures: problem
+                .physics
+                .lip_columns
+                .clone()
+                .map(|c| crate::measures::RunMeasures::new(c, crate::measures::OPEN_THRESHOLD)),
+            ..Default::default()
+        };
+        (writer, history, None)
     };
-    record(&mut sim, &mut writer)?;
+    let problem_hash = checkpoint_every.map(|_| checkpoint::problem_hash(problem));
+    // absolute, so that `run --restart DIR` finds the input from any directory
+    let input = std::fs::canonicalize(&problem.source)
+        .map_or_else(|_| problem.source.clone(), |p| p.display().to_string());
+    if restarted_from.is_none() {
+        record(&mut sim, &mut writer, &mut history, problem)?;
+    }
     let n = sim.num_steps();
     let bar = progress_bar(opts.progress, n as u64);
     let every = problem.time.output_every;
     let mut stepping = 0.0;
-    let mut next_plain = n / 10;
+    let mut next_plain = sim.step_index() + n / 10;
     let mut interrupted = None;
+    let write_checkpoint = |sim: &S,
+                            writer: &mut FrameWriter,
+                            history: &mut RunHistory,
+                            stepping: f64|
+     -> Result<()> {
+        let Some(hash) = &problem_hash else {
+            return Ok(());
+        };
+        let state = sim.checkpoint_state().expect("checked at the start");
+        history.frames = writer
+            .entries()
+            .iter()
+            .map(|e| (e.time, e.file.clone()))
+            .collect();
+        let saved = history.stepping_time;
+        history.stepping_time += stepping;
+        let header = checkpoint::Header {
+            format: checkpoint::FORMAT,
+            precision: sim.precision_name().into(),
+            problem_hash: hash.clone(),
+            input: input.clone(),
+            step: state.step,
+            num_nodes: state.u.len(),
+            num_saliva: state.broken.len(),
+            history: history.clone(),
+        };
+        history.stepping_time = saved;
+        writer.checkpoint(checkpoint::encode(&header, &state))
+    };
     while !sim.is_finished() {
         if stop_requested() {
             interrupted = Some(Interruption {
                 step: sim.step_index(),
                 time: sim.time(),
             });
+            write_checkpoint(&sim, &mut writer, &mut history, stepping)?;
             break;
         }
         let ts = Instant::now();
         let to_frame = every - sim.step_index() % every;
+        let to_checkpoint = checkpoint_every.map_or(usize::MAX, |c| c - sim.step_index() % c);
         let chunk = to_frame
+            .min(to_checkpoint)
             .min(n - sim.step_index())
             .min(INTERRUPT_CHECK_STEPS);
         sim.advance(chunk)?;
         stepping += ts.elapsed().as_secs_f64();
-        if chunk < to_frame && !sim.is_finished() {
-            continue;
+        if chunk == to_frame || sim.is_finished() {
+            record(&mut sim, &mut writer, &mut history, problem)?;
         }
-        record(&mut sim, &mut writer)?;
+        if chunk == to_checkpoint && !sim.is_finished() {
+            write_checkpoint(&sim, &mut writer, &mut history, stepping)?;
+        }
         if let Some(b) = &bar {
             b.set_position(sim.step_index() as u64);
         } else if opts.progress == Progress::Plain && sim.step_index() >= next_plain {
@@ -390,6 +460,8 @@ fn run_with<S: Stepper>(
     if let Some(b) = bar {
         b.finish_and_clear();
     }
+    let stepping = history.stepping_time + stepping;
+    let steps_here = sim.step_index() - restarted_from.unwrap_or(0);
     let summary = RunSummary {
         input: problem.source.clone(),
         kind: "dynamic".into(),
@@ -398,8 +470,8 @@ fn run_with<S: Stepper>(
         dt: problem.time.dt,
         wall_time: t0.elapsed().as_secs_f64(),
         stepping_time: stepping,
-        element_updates_per_second: (sim.step_index() * sim.num_elements()) as f64
-            / stepping.max(1e-12),
+        element_updates_per_second: (steps_here * sim.num_elements()) as f64
+            / (stepping - history.stepping_time).max(1e-12),
         precision: sim.precision_name().into(),
         backend: sim.backend_name(),
         threads: rayon::current_num_threads(),
@@ -411,13 +483,14 @@ fn run_with<S: Stepper>(
         stability: Some(report),
         frames: writer.frames_written(),
         saliva_elements: sim.disc().saliva.elements.len(),
-        broken_saliva: broken,
-        energy,
+        broken_saliva: history.broken_saliva,
+        energy: history.energy,
         newton_iterations: None,
         residual_norm: None,
         interrupted: interrupted.clone(),
+        restarted_from,
     };
-    if let Some(m) = &measures {
+    if let Some(m) = &history.measures {
         write_measures(&opts.out, m)?;
     }
     if let Some(i) = interrupted {
@@ -428,7 +501,59 @@ fn run_with<S: Stepper>(
         });
     }
     writer.finish(&summary)?;
+    if checkpoint_every.is_some() || opts.restart {
+        // the run is complete: its checkpoint serves nothing any more
+        let p = opts.out.join(checkpoint::FILE_NAME);
+        std::fs::remove_file(&p).map_err(|e| crate::error::Error::io(&p, e))?;
+    }
     Ok(summary)
+}
+
+/// Records the state as a frame: energies, broken saliva count, lip measures, the VTU file.
+fn record<S: Stepper>(
+    sim: &mut S,
+    writer: &mut FrameWriter,
+    history: &mut RunHistory,
+    problem: &Problem,
+) -> Result<()> {
+    let u = sim.displacement_f64()?;
+    let saliva = sim.saliva_frame()?;
+    let broken_count = saliva
+        .as_ref()
+        .map_or(0, |s| s.broken.iter().filter(|b| **b).count());
+    if let Some(m) = history.measures.as_mut() {
+        m.push(sim.time(), &problem.mesh.nodes, &u, broken_count);
+    }
+    let e = sim.energies()?;
+    history.energy.time.push(sim.time());
+    history.energy.kinetic.push(e.kinetic);
+    history.energy.strain.push(e.strain);
+    if saliva.is_some() {
+        history.broken_saliva.push(broken_count);
+    }
+    let volume_ratio = volume_ratios(sim.disc(), &u);
+    // a state with an inverted element is not written as a frame: the run stops here
+    if let Some(e) = volume_ratio
+        .iter()
+        .position(|j| !(*j > 0.0 && j.is_finite()))
+    {
+        return Err(crate::error::Error::Diverged {
+            step: sim.step_index(),
+            time: sim.time(),
+            element: Some(e),
+            node: None,
+            reason: format!(
+                "element inverted or degenerate (det F = {}) in the state to be written as a frame; not written",
+                volume_ratio[e]
+            ),
+        });
+    }
+    writer.frame(Frame {
+        time: sim.time(),
+        u,
+        volume_ratio,
+        saliva,
+    })
 }
 
 /// `measures.json`, `gap.csv` (lip gap profiles) and `series.csv` (open fraction, broken
@@ -513,6 +638,7 @@ pub fn equilibrium(
             newton_iterations: Some(res.newton_iterations),
             residual_norm: Some(res.residual_norm),
             interrupted: None,
+            restarted_from: None,
         };
         writer.finish(&summary)?;
         Ok(summary)

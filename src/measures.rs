@@ -97,7 +97,7 @@ pub fn asymmetry(cols: &LipColumns, gap: &[f64]) -> f64 {
 }
 
 /// The measures of one frame.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FrameMeasures {
     pub time: f64,
     pub gap: Vec<f64>,
@@ -107,7 +107,7 @@ pub struct FrameMeasures {
 }
 
 /// The measures of a whole run (`measures.json`).
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RunMeasures {
     pub columns: LipColumns,
     /// Gap above which a column counts as open (m).

@@ -305,6 +305,8 @@ fn unstable_time_step_is_refused_and_a_forced_run_stops_cleanly() {
         threads: 1,
         force_dt: false,
         progress: Progress::Quiet,
+        checkpoint_every: None,
+        restart: false,
     };
     let e = run(&s.problem, &opts).expect_err("must refuse").to_string();
     assert!(
@@ -570,5 +572,149 @@ fn interrupted_runs_leave_complete_frames_and_say_where_they_stopped() {
             assert_eq!((comps, points), (3, 1331), "{f}");
         }
     }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Checkpoint and restart: a run killed with SIGKILL part-way (after a checkpoint and with
+/// frames written after it) and continued with `run --restart DIR` ends with every frame,
+/// `frames.pvd`, `final.vtu` and the summary's series byte for byte those of an uninterrupted
+/// run without checkpoints. A restart refuses a checkpoint of another problem, of another
+/// precision, and a damaged one, with exit status 1, leaving the directory as it was.
+#[test]
+fn a_killed_run_restarted_from_its_checkpoint_gives_the_uninterrupted_frames() {
+    use std::process::{Command, Stdio};
+    let bin = env!("CARGO_BIN_EXE_sticky-lips");
+    let dir = std::env::temp_dir().join(format!("sticky-lips-restart-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    // the two glued slabs (saliva elements break during the pull), 10^5 steps
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/sticky_slabs.toml");
+    let text = std::fs::read_to_string(&example)
+        .unwrap()
+        .replace("total = 0.4", "total = 1.0");
+    let case = dir.join("slabs.toml");
+    std::fs::write(&case, &text).unwrap();
+    let run = |args: &[&str]| {
+        let o = Command::new(bin).args(args).output().unwrap();
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let a = dir.join("a");
+    let b = dir.join("b");
+    let (s, c) = (case.to_str().unwrap(), "--quiet");
+    assert_eq!(run(&["run", s, c, "--out", a.to_str().unwrap()]).0, Some(0));
+    let child = Command::new(bin)
+        .args(["run", s, c, "--checkpoint-every", "5000", "--out"])
+        .arg(&b)
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // kill once a checkpoint is on disk and a frame after it
+    let t0 = std::time::Instant::now();
+    let ck = b.join("checkpoint.bin");
+    while !(ck.exists() && b.join("frame_000007.vtu").exists()) {
+        assert!(t0.elapsed().as_secs() < 60, "no checkpoint within 60 s");
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    let mut child = child;
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(!b.join("final.vtu").exists(), "killed after the end");
+    let (header, _) = sticky_lips::io::checkpoint::read(&ck).unwrap();
+    let on_disk = std::fs::read_dir(&b)
+        .unwrap()
+        .filter(|e| {
+            let n = e.as_ref().unwrap().file_name();
+            let n = n.to_string_lossy();
+            n.starts_with("frame_") && n.ends_with(".vtu")
+        })
+        .count();
+    println!(
+        "killed: checkpoint at step {} listing {} frames, {} frames on disk",
+        header.step,
+        header.history.frames.len(),
+        on_disk
+    );
+    assert!(header.step > 0 && header.step < 100_000 && header.step % 5000 == 0);
+
+    // refusals leave the directory as it was
+    let listing = |d: &Path| {
+        let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| {
+                let p = e.unwrap().path();
+                (
+                    p.file_name().unwrap().to_string_lossy().into_owned(),
+                    std::fs::read(&p).unwrap(),
+                )
+            })
+            .collect();
+        v.sort();
+        v
+    };
+    let before = listing(&b);
+    let other = dir.join("other.toml");
+    std::fs::write(&other, text.replace("k_glue = 0.05 ", "k_glue = 0.06 ")).unwrap();
+    let bs = b.to_str().unwrap();
+    let (code, err) = run(&["run", other.to_str().unwrap(), c, "--restart", bs]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(
+        err.contains("checkpoint.bin") && err.contains("different problem"),
+        "{err}"
+    );
+    let (code, err) = run(&["run", c, "--restart", bs, "--precision", "f32"]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("checkpoint is of an f64 run"), "{err}");
+    let (code, err) = run(&["run", c, "--restart", bs, "--out", a.to_str().unwrap()]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("--out"), "{err}");
+    assert_eq!(
+        listing(&b),
+        before,
+        "a refused restart changed the directory"
+    );
+    let damaged = dir.join("damaged");
+    std::fs::create_dir_all(&damaged).unwrap();
+    let mut bytes = std::fs::read(&ck).unwrap();
+    let mid = bytes.len() / 2;
+    bytes[mid] ^= 1;
+    std::fs::write(damaged.join("checkpoint.bin"), bytes).unwrap();
+    let (code, err) = run(&["run", s, c, "--restart", damaged.to_str().unwrap()]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("damaged"), "{err}");
+
+    // the restart (input taken from the checkpoint) completes the run
+    let (code, err) = run(&["run", c, "--restart", bs]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(!ck.exists(), "the checkpoint of a completed run is removed");
+    let (la, lb) = (listing(&a), listing(&b));
+    let names = |l: &[(String, Vec<u8>)]| l.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&la), names(&lb));
+    let mut frames = 0;
+    for ((name, x), (_, y)) in la.iter().zip(&lb) {
+        if name == "summary.json" {
+            let parse = |b: &[u8]| -> serde_json::Value { serde_json::from_slice(b).unwrap() };
+            let (mut x, mut y) = (parse(x), parse(y));
+            assert_eq!(y["restarted_from"].as_u64(), Some(header.step as u64));
+            for v in [&mut x, &mut y] {
+                let o = v.as_object_mut().unwrap();
+                for k in [
+                    "wall_time",
+                    "stepping_time",
+                    "element_updates_per_second",
+                    "restarted_from",
+                ] {
+                    o.remove(k);
+                }
+            }
+            assert_eq!(x, y, "summary.json");
+        } else {
+            assert!(x == y, "{name} differs from the uninterrupted run's");
+            frames += name.starts_with("frame_") as usize;
+        }
+    }
+    assert_eq!(frames, 101);
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -52,6 +52,8 @@ fn run(name: &str) -> Run {
             threads: 1,
             force_dt: false,
             progress: Progress::Quiet,
+            checkpoint_every: None,
+            restart: false,
         },
     )
     .unwrap();

@@ -1,4 +1,5 @@
 pub mod atomic;
+pub mod checkpoint;
 pub mod niftysim;
 pub mod obj;
 pub mod output;

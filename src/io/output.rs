@@ -50,11 +50,17 @@ struct Model {
     saliva_elements: Vec<u32>,
 }
 
-/// One frame for the writer thread: the file, its data, and the `.pvd` listing it.
-struct Job {
-    path: PathBuf,
-    frame: Frame,
-    pvd: Vec<PvdEntry>,
+/// Work for the writer thread, done in the order handed over.
+enum Job {
+    /// A frame: the file, its data, and the `.pvd` listing it.
+    Frame {
+        path: PathBuf,
+        frame: Frame,
+        pvd: Vec<PvdEntry>,
+    },
+    /// A checkpoint (`io::checkpoint`), written after every frame handed over before it, so
+    /// that the frames it lists are on disk when it is.
+    Checkpoint { path: PathBuf, bytes: Vec<u8> },
 }
 
 /// Writes the frames of one run into a directory.
@@ -85,14 +91,62 @@ impl FrameWriter {
         saliva_elements: &[u32],
     ) -> Result<Self> {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
-            let entry = entry.map_err(|e| Error::io(dir, e))?;
-            let name = entry.file_name().to_string_lossy().to_string();
-            let stale = is_ours(&name) || is_our_temporary(&name);
-            if stale {
-                std::fs::remove_file(entry.path()).map_err(|e| Error::io(entry.path(), e))?;
+        remove_stale(dir, &[])?;
+        Self::start(
+            dir,
+            reference,
+            elements,
+            material,
+            saliva_elements,
+            Vec::new(),
+        )
+    }
+
+    /// Goes on with the frames of a run restarted from a checkpoint: `frames` (those the
+    /// checkpoint lists) must be in `dir` and stay; every other output of ours (frames
+    /// written after the checkpoint, `final.vtu`, `summary.json`, temporary files) is
+    /// removed, and `frames.pvd` lists `frames` again. The checkpoint itself stays until a
+    /// newer one replaces it.
+    pub fn resume(
+        dir: &Path,
+        reference: &[[f64; 3]],
+        elements: &[[u32; 8]],
+        material: &[u32],
+        saliva_elements: &[u32],
+        frames: Vec<PvdEntry>,
+    ) -> Result<Self> {
+        let keep: Vec<&str> = frames.iter().map(|e| e.file.as_str()).collect();
+        for f in &keep {
+            let p = dir.join(f);
+            if !p.is_file() {
+                return Err(Error::io(
+                    &p,
+                    std::io::Error::other(
+                        "a frame the checkpoint lists is missing; the run cannot be continued",
+                    ),
+                ));
             }
         }
+        let mut keep_all = keep.clone();
+        keep_all.push(crate::io::checkpoint::FILE_NAME);
+        remove_stale(dir, &keep_all)?;
+        let pvd = dir.join("frames.pvd");
+        if frames.is_empty() {
+            let _ = std::fs::remove_file(&pvd);
+        } else {
+            write_pvd(&pvd, &frames).map_err(|e| Error::io(&pvd, e))?;
+        }
+        Self::start(dir, reference, elements, material, saliva_elements, frames)
+    }
+
+    fn start(
+        dir: &Path,
+        reference: &[[f64; 3]],
+        elements: &[[u32; 8]],
+        material: &[u32],
+        saliva_elements: &[u32],
+        entries: Vec<PvdEntry>,
+    ) -> Result<Self> {
         let model = Arc::new(Model {
             reference: reference.to_vec(),
             elements: elements.to_vec(),
@@ -105,9 +159,16 @@ impl FrameWriter {
             .name("frame-writer".into())
             .spawn(move || -> Result<()> {
                 for job in rx {
-                    write_frame_file(&m, &job.path, &job.frame)?;
-                    let pvd = job.path.with_file_name("frames.pvd");
-                    write_pvd(&pvd, &job.pvd).map_err(|e| Error::io(&pvd, e))?;
+                    match job {
+                        Job::Frame { path, frame, pvd } => {
+                            write_frame_file(&m, &path, &frame)?;
+                            let p = path.with_file_name("frames.pvd");
+                            write_pvd(&p, &pvd).map_err(|e| Error::io(&p, e))?;
+                        }
+                        Job::Checkpoint { path, bytes } => {
+                            write_atomic(&path, &bytes).map_err(|e| Error::io(&path, e))?;
+                        }
+                    }
                 }
                 Ok(())
             })
@@ -115,8 +176,8 @@ impl FrameWriter {
         Ok(FrameWriter {
             dir: dir.to_path_buf(),
             model,
-            entries: Vec::new(),
-            last: None,
+            last: entries.last().map(|e| e.file.clone()),
+            entries,
             worker: Some((tx, handle)),
         })
     }
@@ -136,11 +197,29 @@ impl FrameWriter {
             time: frame.time,
             file: name.clone(),
         });
-        let job = Job {
+        let job = Job::Frame {
             path: self.dir.join(&name),
             frame,
             pvd: self.entries.clone(),
         };
+        self.send(job)?;
+        self.last = Some(name);
+        Ok(())
+    }
+
+    /// The frames listed so far (time, file name), in order.
+    pub fn entries(&self) -> &[PvdEntry] {
+        &self.entries
+    }
+
+    /// Hands a checkpoint's bytes to the writer thread: written atomically as
+    /// `checkpoint.bin` once the frames handed over before it are on disk.
+    pub fn checkpoint(&mut self, bytes: Vec<u8>) -> Result<()> {
+        let path = self.dir.join(crate::io::checkpoint::FILE_NAME);
+        self.send(Job::Checkpoint { path, bytes })
+    }
+
+    fn send(&mut self, job: Job) -> Result<()> {
         let sent = match &self.worker {
             Some((tx, _)) => tx.send(job).is_ok(),
             None => false,
@@ -153,7 +232,6 @@ impl FrameWriter {
                 std::io::Error::other("the frame writer thread has stopped"),
             ));
         }
-        self.last = Some(name);
         Ok(())
     }
 
@@ -236,10 +314,30 @@ impl Drop for FrameWriter {
     }
 }
 
+/// Removes the outputs of an earlier run from `dir` (ours and our temporary files), except
+/// the files named in `keep`.
+fn remove_stale(dir: &Path, keep: &[&str]) -> Result<()> {
+    for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+        let entry = entry.map_err(|e| Error::io(dir, e))?;
+        let name = entry.file_name().to_string_lossy().to_string();
+        let stale = is_ours(&name) || is_our_temporary(&name);
+        if stale && !keep.contains(&name.as_str()) {
+            std::fs::remove_file(entry.path()).map_err(|e| Error::io(entry.path(), e))?;
+        }
+    }
+    Ok(())
+}
+
 /// A file of a run's output that a new run into the same directory replaces.
 fn is_ours(name: &str) -> bool {
     (name.starts_with("frame_") && name.ends_with(".vtu"))
-        || ["frames.pvd", "final.vtu", "summary.json"].contains(&name)
+        || [
+            "frames.pvd",
+            "final.vtu",
+            "summary.json",
+            crate::io::checkpoint::FILE_NAME,
+        ]
+        .contains(&name)
 }
 
 /// A temporary file of `io::atomic` (`.NAME.tmp-PID`) for one of our outputs, left behind by

@@ -18,6 +18,40 @@ use crate::tled::precompute::Discretisation;
 use crate::tled::saliva_forces::{saliva_forces, SalivaState};
 use crate::tled::simd::SimdReal;
 
+/// The solver's state after `step` iterations, every value as `f64` (exact for `f32`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SolverState {
+    pub step: usize,
+    /// Displacement at `step` and at `step - 1` (m), per node.
+    pub u: Vec<[f64; 3]>,
+    pub u_prev: Vec<[f64; 3]>,
+    /// Per saliva element: the modified force of the last step (eq. 11's `F_{s-1}`).
+    pub saliva_previous: Vec<[[f64; 3]; 8]>,
+    pub broken: Vec<bool>,
+    /// Time of the first breaking (s), NaN if never.
+    pub broken_at: Vec<f64>,
+    /// The last step's moisture (um), breaking point Z and stretch Q.
+    pub moisture: Vec<f64>,
+    pub z: Vec<f64>,
+    pub q: Vec<f64>,
+}
+
+impl SolverState {
+    /// Every number of the state in a fixed order (the checkpoint file's order).
+    pub fn numbers(&self) -> impl Iterator<Item = f64> + '_ {
+        let nodes = self.u.iter().chain(&self.u_prev).flatten().copied();
+        let previous = self.saliva_previous.iter().flatten().flatten().copied();
+        let saliva = self
+            .broken_at
+            .iter()
+            .chain(&self.moisture)
+            .chain(&self.z)
+            .chain(&self.q)
+            .copied();
+        nodes.chain(previous).chain(saliva)
+    }
+}
+
 /// Energies of a state (J).
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
 pub struct Energies {
@@ -114,6 +148,75 @@ impl<T: SimdReal> Simulation<T> {
         for (d, s) in self.u_prev.iter_mut().zip(u_prev) {
             *d = s.map(T::from_f64);
         }
+    }
+
+    /// Everything the next steps depend on (for a checkpoint), as `f64` (exact for `f32`).
+    pub fn checkpoint_state(&self) -> SolverState {
+        let s = &self.saliva;
+        SolverState {
+            step: self.step,
+            u: self.displacement_f64(),
+            u_prev: self.u_prev.iter().map(|v| v.map(T::to_f64)).collect(),
+            saliva_previous: s
+                .previous
+                .iter()
+                .map(|b| b.map(|r| r.map(T::to_f64)))
+                .collect(),
+            broken: s.broken.clone(),
+            broken_at: s.broken_at.clone(),
+            moisture: s.moisture.clone(),
+            z: s.z.clone(),
+            q: s.q.clone(),
+        }
+    }
+
+    /// Continues from a state of [`Simulation::checkpoint_state`] of the same problem and
+    /// precision: the following steps give the same bits as if the run had not stopped.
+    pub fn restore(&mut self, state: &SolverState) -> Result<()> {
+        let ns = self.saliva.broken.len();
+        let saliva_lengths = [
+            state.saliva_previous.len(),
+            state.broken.len(),
+            state.broken_at.len(),
+            state.moisture.len(),
+            state.z.len(),
+            state.q.len(),
+        ];
+        if state.u.len() != self.u.len()
+            || state.u_prev.len() != self.u.len()
+            || saliva_lengths.iter().any(|&l| l != ns)
+            || state.step > self.num_steps
+        {
+            return Err(Error::input(
+                "checkpoint",
+                crate::error::Location::None,
+                format!(
+                    "the state ({} nodes, {} saliva elements, step {}) does not fit this model ({} nodes, {ns} saliva elements, {} steps)",
+                    state.u.len(),
+                    state.broken.len(),
+                    state.step,
+                    self.u.len(),
+                    self.num_steps
+                ),
+            ));
+        }
+        let narrow =
+            |v: &[[f64; 3]]| -> Vec<[T; 3]> { v.iter().map(|x| x.map(T::from_f64)).collect() };
+        self.u = narrow(&state.u);
+        self.u_prev = narrow(&state.u_prev);
+        let s = &mut self.saliva;
+        s.previous = state
+            .saliva_previous
+            .iter()
+            .map(|b| b.map(|r| r.map(T::from_f64)))
+            .collect();
+        s.broken.clone_from(&state.broken);
+        s.broken_at.clone_from(&state.broken_at);
+        s.moisture.clone_from(&state.moisture);
+        s.z.clone_from(&state.z);
+        s.q.clone_from(&state.q);
+        self.step = state.step;
+        Ok(())
     }
 
     /// Advances one iteration. On divergence the state is left as it was before the step.

@@ -81,11 +81,24 @@ struct InputArgs {
 enum Command {
     /// Explicit dynamic run (TLED, central differences).
     Run {
-        #[command(flatten)]
-        input: InputArgs,
+        /// A scenario (.toml) or a NiftySim model (.xml); with --restart, the checkpoint's
+        /// input when not given.
+        #[arg(required_unless_present = "restart")]
+        input: Option<PathBuf>,
+        /// Reproduce NiftySim: centroid gradients and its timing quirks (XML input only).
+        #[arg(long)]
+        niftysim_compat: bool,
         /// Output directory (default: the scenario's [output] dir, else out/<input name>).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Write the run's full state to OUT/checkpoint.bin every N steps (CPU backend),
+        /// so that `--restart` can continue it; removed when the run completes.
+        #[arg(long, value_name = "N", value_parser = steps_arg)]
+        checkpoint_every: Option<usize>,
+        /// Continue the run in DIR from its checkpoint: the frames after the checkpoint are
+        /// written again, bit-identical to an uninterrupted run's.
+        #[arg(long, value_name = "DIR")]
+        restart: Option<PathBuf>,
         #[arg(long, value_enum, default_value = "f64")]
         precision: PrecisionArg,
         /// Where the steps run (the GPU runs f32 everywhere, f64 where the adapter has SHADER_F64).
@@ -328,15 +341,40 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
     match cli.command {
         Command::Run {
             input,
+            niftysim_compat,
             out,
+            checkpoint_every,
+            restart,
             precision,
             backend,
             threads,
             force_dt,
             quiet,
         } => {
+            let input = InputArgs {
+                input: match (input, &restart) {
+                    (Some(i), _) => i,
+                    (None, Some(dir)) => checkpoint_input(dir)?,
+                    (None, None) => unreachable!("clap requires one of the two"),
+                },
+                niftysim_compat,
+            };
             let (p, default_out) = load(&input)?;
-            let out = out_dir(out, default_out, &input.input);
+            let out = match (&restart, out) {
+                (Some(dir), Some(o)) if o != *dir => {
+                    return Err(sticky_lips::Error::input(
+                        "--out",
+                        sticky_lips::error::Location::None,
+                        format!(
+                            "--restart {} continues the run in that directory; --out {} differs",
+                            dir.display(),
+                            o.display()
+                        ),
+                    ))
+                }
+                (Some(dir), _) => dir.clone(),
+                (None, o) => out_dir(o, default_out, &input.input),
+            };
             let progress = if quiet {
                 Progress::Quiet
             } else if std::io::stderr().is_terminal() {
@@ -351,6 +389,8 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                 threads,
                 force_dt,
                 progress,
+                checkpoint_every,
+                restart: restart.is_some(),
             };
             let s = driver::run(&p, &opts)?;
             println!(
@@ -383,6 +423,8 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                 threads,
                 force_dt: false,
                 progress: Progress::Quiet,
+                checkpoint_every: None,
+                restart: false,
             };
             let so = StaticOptions {
                 load_steps,
@@ -594,6 +636,21 @@ fn evaporation(
 }
 
 /// `--threads N`: at least 1.
+fn steps_arg(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        Ok(_) => Err("the number of steps must be at least 1".into()),
+        Err(e) => Err(format!("`{s}` is not a step count: {e}")),
+    }
+}
+
+/// The input file a checkpoint in `dir` was written for.
+fn checkpoint_input(dir: &Path) -> sticky_lips::Result<PathBuf> {
+    let path = dir.join(sticky_lips::io::checkpoint::FILE_NAME);
+    let (header, _) = sticky_lips::io::checkpoint::read(&path)?;
+    Ok(PathBuf::from(header.input))
+}
+
 fn threads_arg(s: &str) -> Result<usize, String> {
     match s.parse::<usize>() {
         Ok(n) if n >= 1 => Ok(n),

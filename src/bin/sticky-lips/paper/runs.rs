@@ -90,6 +90,8 @@ pub fn run(opts: &PaperOptions, s: &Spec) -> Result<Run> {
                 threads: opts.threads,
                 force_dt: false,
                 progress: opts.progress,
+                checkpoint_every: None,
+                restart: false,
             },
         )?
     };
