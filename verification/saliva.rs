@@ -434,6 +434,77 @@ fn across_direction_finds_the_thin_direction() {
 }
 
 #[test]
+fn across_direction_ties_pick_the_first_axis() {
+    // An axis-aligned box numbered like the natural element: the Jacobian's columns are its
+    // half sizes along x, y, z. Lengths within 1e-12 (relative) of the shortest so far count as
+    // a tie and keep the earlier axis, so that round-off cannot flip a cube's choice.
+    use sticky_lips::element::hex8::NATURAL;
+    let boxed = |h: [f64; 3]| -> [[f64; 3]; 8] {
+        std::array::from_fn(|a| std::array::from_fn(|i| h[i] * NATURAL[a][i]))
+    };
+    let l = 1e-3;
+    let cases: [([f64; 3], [f64; 3]); 6] = [
+        // an exact cube: the first axis
+        ([l, l, l], [1.0, 0.0, 0.0]),
+        // the second and third shorter by 1e-13 and 5e-13: still ties, the first axis
+        ([l, l * (1.0 - 1e-13), l * (1.0 - 5e-13)], [1.0, 0.0, 0.0]),
+        // the third shorter by 1e-10 than the tied first two: the third
+        ([l, l * (1.0 - 1e-13), l * (1.0 - 1e-10)], [0.0, 0.0, 1.0]),
+        // the second clearly shortest
+        ([l, 0.5 * l, l], [0.0, 1.0, 0.0]),
+        // the second shorter by 1e-9, the third tied with the second: the second
+        (
+            [l, l * (1.0 - 1e-9), l * (1.0 - 1e-9 - 1e-13)],
+            [0.0, 1.0, 0.0],
+        ),
+        // the third shortest
+        ([2.0 * l, 3.0 * l, l], [0.0, 0.0, 1.0]),
+    ];
+    for (h, want) in cases {
+        let a = across_direction(&boxed(h));
+        assert_eq!(a, want, "half sizes {h:?}");
+    }
+}
+
+#[test]
+fn breaking_rule_at_the_boundaries_q_equal_z_and_q_equal_1() {
+    // Eq. (11): the unmodified force only while Q < Z; at Q = Z exactly the element is broken
+    // (its force is 0.99 F_(t-1)). Latched and broken: the unmodified force returns only for
+    // Q < 1 (compression), so Q = 1 exactly still decays.
+    fn check<T: SimdReal>() {
+        use sticky_lips::material::saliva::apply_breaking_rule;
+        let fresh: [[T; 3]; 8] =
+            std::array::from_fn(|a| std::array::from_fn(|k| T::from_f64((a * 3 + k) as f64 + 1.0)));
+        let prev: [[T; 3]; 8] = std::array::from_fn(|a| {
+            std::array::from_fn(|k| T::from_f64(-0.5 * ((a + k) as f64) - 0.25))
+        });
+        let decay = T::from_f64(0.99);
+        let decayed = prev.map(|r| r.map(|v| decay * v));
+        let z = T::from_f64(1.05);
+        let below = |x: T| T::from_f64(x.to_f64() - 4.0 * T::EPSILON.to_f64());
+        // (rule, q, latched state before) -> (broken after, force expected)
+        let cases = [
+            (BreakingRule::Literal, z, false, true, decayed),
+            (BreakingRule::Literal, below(z), false, false, fresh),
+            (BreakingRule::Latched, z, false, true, decayed),
+            (BreakingRule::Latched, below(z), false, false, fresh),
+            (BreakingRule::Latched, T::ONE, true, true, decayed),
+            (BreakingRule::Latched, below(T::ONE), true, true, fresh),
+            (BreakingRule::Literal, T::ONE, true, false, fresh),
+        ];
+        for (i, (rule, q, was, broken_after, want)) in cases.into_iter().enumerate() {
+            let (mut f, mut p) = (fresh, prev);
+            let broken = apply_breaking_rule(q, z, rule, decay, was, &mut f, &mut p);
+            assert_eq!(broken, broken_after, "{} case {i}: broken", T::NAME);
+            assert_eq!(bits(&f), bits(&want), "{} case {i}: force", T::NAME);
+            assert_eq!(bits(&p), bits(&want), "{} case {i}: previous", T::NAME);
+        }
+    }
+    check::<f64>();
+    check::<f32>();
+}
+
+#[test]
 fn sheared_strip_stretch_is_measured_across_the_slab() {
     // A saliva element of the face's strip: its rung (lower to upper lip) runs up by dy and
     // forward by dz (the upper lip in front), it is extruded straight back by T. Pulling the
@@ -701,6 +772,12 @@ fn run_rule<T: SimdReal>(params: SalivaParams, intact: impl Fn(usize) -> bool) -
             BreakingRule::Latched => trace.first_break.is_some(),
         };
         assert_eq!(st.broken[0], expect_broken, "step {s}: broken flag");
+        // the time of the first breaking: NaN until then, kept afterwards (also through
+        // the literal rule's intact steps after a break)
+        match trace.first_break {
+            None => assert!(st.broken_at[0].is_nan(), "step {s}: intact, broken_at set"),
+            Some(b) => assert_eq!(st.broken_at[0], b as f64 * DT1, "step {s}: broken_at"),
+        }
     }
     trace
 }
