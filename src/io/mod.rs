@@ -1,3 +1,4 @@
+pub mod args;
 pub mod atomic;
 pub mod checkpoint;
 pub mod niftysim;

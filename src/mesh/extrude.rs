@@ -104,7 +104,7 @@ pub fn group_thickness(
             None => {
                 return Err(Error::input(
                     file,
-                    Location::Field(format!("thickness of group `{name}`")),
+                    Location::Field(format!("thickness of group {name}")),
                     format!(
                         "no group `{name}` in the surface; its groups are: {}",
                         surface.groups.join(", ")
@@ -123,20 +123,20 @@ pub fn group_thickness(
         .map(|(name, v)| match v {
             Some(v) if v.is_finite() && v > 0.0 && v > most && size > 0.0 => Err(Error::input(
                 file,
-                Location::Field(format!("thickness of group `{name}`")),
+                Location::Field(format!("thickness of group {name}")),
                 format!(
-                    "thickness {v} m is more than 1000 times the surface's size ({size:.3e} m, its bounding box diagonal): check the unit"
+                    "thickness {v:e} m is more than 1000 times the surface's size ({size:.3e} m, its bounding box diagonal): check the unit"
                 ),
             )),
             Some(v) if v.is_finite() && v > 0.0 => Ok(v),
             Some(v) => Err(Error::input(
                 file,
-                Location::Field(format!("thickness of group `{name}`")),
+                Location::Field(format!("thickness of group {name}")),
                 format!("thickness {v} must be positive and finite (m)"),
             )),
             None => Err(Error::input(
                 file,
-                Location::Field(format!("thickness of group `{name}`")),
+                Location::Field(format!("thickness of group {name}")),
                 "no thickness given for this group and no default thickness",
             )),
         })
@@ -278,7 +278,7 @@ pub fn extrude_with(
         if has_quads[g] && !(tg[g].is_finite() && tg[g] > 0.0) {
             return Err(Error::input(
                 file,
-                Location::Field(format!("thickness of group `{}`", surface.groups[g])),
+                Location::Field(format!("thickness of group {}", surface.groups[g])),
                 format!("thickness {} must be positive and finite (m)", tg[g]),
             ));
         }

@@ -209,7 +209,7 @@ impl Problem {
                 f,
                 "dt",
                 format!(
-                    "{} s at a time step of {} s is {steps:.3e} steps; a run may take at most {MAX_STEPS}",
+                    "{:e} s at a time step of {:e} s is {steps:.3e} steps; a run may take at most {MAX_STEPS}",
                     self.time.total_time, self.time.dt
                 ),
             ));

@@ -635,13 +635,9 @@ fn evaporation(
     Ok(())
 }
 
-/// `--threads N`: at least 1.
+/// `--checkpoint-every N`: at least 1.
 fn steps_arg(s: &str) -> Result<usize, String> {
-    match s.parse::<usize>() {
-        Ok(n) if n >= 1 => Ok(n),
-        Ok(_) => Err("the number of steps must be at least 1".into()),
-        Err(e) => Err(format!("`{s}` is not a step count: {e}")),
-    }
+    sticky_lips::io::args::count(s, "step")
 }
 
 /// The input file a checkpoint in `dir` was written for.
@@ -651,12 +647,9 @@ fn checkpoint_input(dir: &Path) -> sticky_lips::Result<PathBuf> {
     Ok(PathBuf::from(header.input))
 }
 
+/// `--threads N`: at least 1.
 fn threads_arg(s: &str) -> Result<usize, String> {
-    match s.parse::<usize>() {
-        Ok(n) if n >= 1 => Ok(n),
-        Ok(_) => Err("the number of threads must be at least 1".into()),
-        Err(e) => Err(format!("`{s}` is not a thread count: {e}")),
-    }
+    sticky_lips::io::args::count(s, "thread")
 }
 
 fn blend(input: &InputArgs, shapes: &[String], out: &Path) -> sticky_lips::Result<()> {
@@ -665,23 +658,7 @@ fn blend(input: &InputArgs, shapes: &[String], out: &Path) -> sticky_lips::Resul
     let nn = p.mesh.nodes.len();
     let mut fields = Vec::new();
     for spec in shapes {
-        let (path, w) = spec.rsplit_once('=').ok_or_else(|| {
-            Error::input(
-                "--shape",
-                Location::None,
-                format!("`{spec}`: expected PATH.vtu=WEIGHT"),
-            )
-        })?;
-        let w: f64 = match w.parse::<f64>() {
-            Ok(v) if v.is_finite() => v,
-            _ => {
-                return Err(Error::input(
-                    "--shape",
-                    Location::None,
-                    format!("`{w}` is not a weight (a finite number)"),
-                ))
-            }
-        };
+        let (path, w) = sticky_lips::io::args::name_value(spec, "--shape", "PATH.vtu=WEIGHT")?;
         let (v, comps, points) =
             sticky_lips::io::vtu::read_point_data_f64(Path::new(path), "displacement")?;
         if comps != 3 || points != nn {
@@ -888,28 +865,6 @@ fn unit_scale(name: &str) -> Option<f64> {
     }
 }
 
-fn parse_vec3(text: &str, what: &str) -> sticky_lips::Result<[f64; 3]> {
-    let v: Vec<f64> = text
-        .split(',')
-        .map(|t| t.trim().parse::<f64>())
-        .collect::<std::result::Result<_, _>>()
-        .map_err(|_| {
-            sticky_lips::Error::input(
-                "command line",
-                sticky_lips::error::Location::Field(what.into()),
-                format!("`{text}` is not X,Y,Z"),
-            )
-        })?;
-    if v.len() != 3 || !v.iter().all(|x| x.is_finite()) {
-        return Err(sticky_lips::Error::input(
-            "command line",
-            sticky_lips::error::Location::Field(what.into()),
-            format!("`{text}` must be three finite numbers X,Y,Z"),
-        ));
-    }
-    Ok([v[0], v[1], v[2]])
-}
-
 fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
     use sticky_lips::error::{Error, Location};
     use sticky_lips::mesh::face;
@@ -924,8 +879,8 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
     })?;
     let frame = face::InputFrame {
         scale,
-        up: parse_vec3(a.up, "--up")?,
-        forward: parse_vec3(a.forward, "--forward")?,
+        up: sticky_lips::io::args::vec3(a.up, "--up")?,
+        forward: sticky_lips::io::args::vec3(a.forward, "--forward")?,
     };
     let head = sticky_lips::io::obj::read_obj(a.input)?;
     let rig: face::FaceRig = match a.rig {
@@ -992,52 +947,18 @@ fn extrude(
     direction: Option<&str>,
     out: &Path,
 ) -> sticky_lips::Result<()> {
-    use sticky_lips::error::{Error, Location};
     use sticky_lips::mesh::extrude;
     let file = surface.display().to_string();
     let s = sticky_lips::io::obj::read_obj(surface)?;
     let mut per_group = Vec::new();
     for g in groups {
-        let (name, t) = g.split_once('=').ok_or_else(|| {
-            Error::input(
-                "--group",
-                Location::None,
-                format!("`{g}`: expected NAME=METRES"),
-            )
-        })?;
-        let t: f64 = t.parse().map_err(|_| {
-            Error::input(
-                "--group",
-                Location::None,
-                format!("`{t}` is not a thickness"),
-            )
-        })?;
+        let (name, t) = sticky_lips::io::args::name_value(g, "--group", "NAME=METRES")?;
         per_group.push((name.to_string(), t));
     }
     let t = extrude::group_thickness(&s, thickness, &per_group, &file)?;
     let dir = match direction {
         None => extrude::Direction::Normal,
-        Some(d) => {
-            let v: Vec<f64> = d
-                .split(',')
-                .map(|c| c.trim().parse::<f64>())
-                .collect::<Result<_, _>>()
-                .map_err(|_| {
-                    Error::input(
-                        "--direction",
-                        Location::None,
-                        format!("`{d}`: expected X,Y,Z"),
-                    )
-                })?;
-            if v.len() != 3 {
-                return Err(Error::input(
-                    "--direction",
-                    Location::None,
-                    format!("`{d}`: expected X,Y,Z"),
-                ));
-            }
-            extrude::Direction::Fixed([v[0], v[1], v[2]])
-        }
+        Some(d) => extrude::Direction::Fixed(sticky_lips::io::args::vec3(d, "--direction")?),
     };
     let mesh = extrude::extrude_with(&s, &|g| t[g], dir, &file)?;
     mesh.validate(&file)?;

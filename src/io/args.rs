@@ -1,0 +1,73 @@
+//! Values given on the command line: counts, vectors and `NAME=VALUE` pairs. Every function
+//! refuses what is not a valid value with a message naming the option, and returns only
+//! finite numbers (fuzzed by `fuzz/fuzz_targets/cli_values.rs`).
+
+use crate::error::{Error, Location, Result};
+
+/// A count of at least 1 (`what`: "thread", "step"), for `--threads` and `--checkpoint-every`.
+pub fn count(text: &str, what: &str) -> std::result::Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        Ok(_) => Err(format!("the number of {what}s must be at least 1")),
+        Err(e) => Err(format!("`{text}` is not a {what} count: {e}")),
+    }
+}
+
+/// Three finite numbers `X,Y,Z` for the option `option` (e.g. `--up`).
+pub fn vec3(text: &str, option: &str) -> Result<[f64; 3]> {
+    let bad = |m: String| Error::input("command line", Location::Field(option.into()), m);
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| bad(format!("`{text}` is not X,Y,Z")))?;
+    match v[..] {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok([x, y, z]),
+        _ => Err(bad(format!("`{text}` must be three finite numbers X,Y,Z"))),
+    }
+}
+
+/// `NAME=VALUE` with a finite VALUE for the option `option`; the name is what lies before the
+/// last `=` and may not be empty. `expected` says the form in messages (`PATH.vtu=WEIGHT`).
+pub fn name_value<'a>(spec: &'a str, option: &str, expected: &str) -> Result<(&'a str, f64)> {
+    let bad = |m: String| Error::input(option, Location::None, m);
+    let (name, value) = spec
+        .rsplit_once('=')
+        .filter(|(n, _)| !n.is_empty())
+        .ok_or_else(|| bad(format!("`{spec}`: expected {expected}")))?;
+    match value.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok((name, v)),
+        _ => Err(bad(format!(
+            "`{value}` is not a finite number ({expected})"
+        ))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn values_are_checked() {
+        assert_eq!(count("4", "thread"), Ok(4));
+        assert!(count("0", "thread").unwrap_err().contains("at least 1"));
+        assert!(count("-1", "step")
+            .unwrap_err()
+            .contains("not a step count"));
+        assert_eq!(vec3(" 0, 1 ,-2.5", "--up").unwrap(), [0.0, 1.0, -2.5]);
+        for bad in ["1,2", "1,2,3,4", "1,nan,2", "inf,0,0", "a,b,c", ""] {
+            let e = vec3(bad, "--up").unwrap_err().to_string();
+            assert!(e.contains("--up"), "{bad}: {e}");
+        }
+        assert_eq!(
+            name_value("a=b.vtu=0.5", "--shape", "PATH=W").unwrap(),
+            ("a=b.vtu", 0.5)
+        );
+        for bad in ["x.vtu", "=1", "x=nan", "x=-inf", "x="] {
+            let e = name_value(bad, "--shape", "PATH=W")
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("--shape"), "{bad}: {e}");
+        }
+    }
+}
