@@ -537,11 +537,21 @@ fn read_array(
     section: &str,
     name: &str,
 ) -> crate::error::Result<(Vec<f64>, usize, usize)> {
+    let text = std::fs::read_to_string(path).map_err(|e| crate::error::Error::io(path, e))?;
+    parse_array(&text, &path.display().to_string(), section, name)
+}
+
+/// [`read_point_data_f64`] and [`read_cell_data`] on a file's text (`section`: `PointData` or
+/// `CellData`); errors name `file`.
+pub fn parse_array(
+    text: &str,
+    file: &str,
+    section: &str,
+    name: &str,
+) -> crate::error::Result<(Vec<f64>, usize, usize)> {
     use crate::error::{Error, Location};
-    let file = path.display().to_string();
-    let bad = |m: String| Error::input(file.clone(), Location::None, m);
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let doc = roxmltree::Document::parse(&text).map_err(|e| bad(format!("malformed XML: {e}")))?;
+    let bad = |m: String| Error::input(file, Location::None, m);
+    let doc = roxmltree::Document::parse(text).map_err(|e| bad(format!("malformed XML: {e}")))?;
     let piece = doc
         .descendants()
         .find(|n| n.has_tag_name("Piece"))
@@ -582,8 +592,8 @@ fn read_array(
             if raw.len() < 8 {
                 return Err(bad(format!("array `{name}`: truncated")));
             }
-            let n = u64::from_le_bytes(raw[..8].try_into().unwrap()) as usize;
-            if raw.len() != 8 + n || n % width != 0 {
+            let n = u64::from_le_bytes(raw[..8].try_into().unwrap());
+            if raw.len() as u64 - 8 != n || n % width as u64 != 0 {
                 return Err(bad(format!(
                     "array `{name}`: byte count {n} does not match the data"
                 )));
@@ -613,7 +623,7 @@ fn read_array(
             )))
         }
     };
-    if values.len() != comps * count {
+    if Some(values.len()) != comps.checked_mul(count) {
         return Err(bad(format!(
             "array `{name}` has {} values for {count} x {comps}",
             values.len()

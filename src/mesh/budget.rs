@@ -61,7 +61,7 @@ pub fn check_with(
                 file,
                 field,
                 format!(
-                    "gives {elements} hexahedra and {nodes} nodes, which need about {} to run; this machine has {} available",
+                    "gives {elements} hexahedra and {nodes} nodes, which need about {} to run; {} are available (the machine's free memory, or {LIMIT_VARIABLE} where set)",
                     gib(need),
                     gib(have)
                 ),
@@ -71,9 +71,27 @@ pub fn check_with(
     Ok(())
 }
 
-/// [`check_with`] against this machine's available memory.
+/// The environment variable that lowers the memory a model may use below what the machine
+/// has available (MiB): for a job on a shared node (a Slurm allocation, a container) and for
+/// the fuzz targets.
+pub const LIMIT_VARIABLE: &str = "STICKY_LIPS_MEMORY_MB";
+
+/// The memory a model may use: the machine's available memory, or [`LIMIT_VARIABLE`] where
+/// that is set and smaller. An unreadable value of the variable is ignored (the machine's).
+pub fn limit_bytes() -> Option<u128> {
+    let cap = std::env::var(LIMIT_VARIABLE)
+        .ok()
+        .and_then(|v| v.trim().parse::<u64>().ok())
+        .map(|mb| mb as u128 * (1 << 20));
+    match (available_bytes(), cap) {
+        (Some(a), Some(c)) => Some(a.min(c)),
+        (a, c) => a.or(c),
+    }
+}
+
+/// [`check_with`] against [`limit_bytes`].
 pub fn check(file: &str, field: &str, nodes: u128, elements: u128) -> Result<()> {
-    check_with(file, field, nodes, elements, available_bytes())
+    check_with(file, field, nodes, elements, limit_bytes())
 }
 
 /// Nodes and hexahedra of a block of `cells`, without overflow.
@@ -116,7 +134,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("field `mesh.cells`") && e.contains("1.00 GiB available"),
+            e.contains("field `mesh.cells`") && e.contains("1.00 GiB are available"),
             "{e}"
         );
         let e = check_with("f.toml", "mesh.cells", 1 << 33, 1, None)
