@@ -7,7 +7,11 @@
 # 3. cargo fmt --check and cargo clippy -D warnings;
 # 4. cargo test (unit tests, the `verification` target, doc tests);
 # 5. runs the example scenario and a NiftySim model through the CLI and checks every file
-#    written with meshio (scripts/check_outputs.py).
+#    written with meshio (scripts/check_outputs.py);
+# 6. the paper's figures from one command (--quick), the MakeHuman assets re-derived;
+# 7. every fuzz target for FUZZ_SECONDS (default 20) seconds (scripts/fuzz.sh: installs
+#    cargo-fuzz, builds with RUSTC_BOOTSTRAP=1).
+# Mutation testing is its own command (scripts/mutants.sh; see verification/README.md).
 # With CI=true it first installs lavapipe (Mesa's software Vulkan driver) so that the GPU
 # backend is tested on the CPU, and sets STICKY_LIPS_REQUIRE_GPU=1 (a missing adapter fails
 # the GPU tests instead of skipping them) and WGPU_BACKEND=vulkan (no silent OpenGL fallback).
@@ -137,5 +141,8 @@ done
 # the procedural mouth still makes every figure
 "$BIN" paper --quick --model procedural --only fig4 --out "$OUT/paper-procedural" --threads 2
 test -s "$OUT/paper-procedural/fig4_opening_over_time.png"
+
+step "fuzz targets: every parser, ${FUZZ_SECONDS:-20} s each from the committed corpus (scripts/fuzz.sh)"
+FUZZ_SECONDS=${FUZZ_SECONDS:-20} bash scripts/fuzz.sh
 
 printf '\nall checks passed (%d s)\n' "$(($(date +%s) - T0))"

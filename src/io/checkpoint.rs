@@ -119,7 +119,8 @@ pub fn read(path: &Path) -> Result<(Header, SolverState)> {
     decode(&bytes).map_err(|m| bad(path, m))
 }
 
-fn decode(bytes: &[u8]) -> std::result::Result<(Header, SolverState), String> {
+/// Decodes the bytes of a checkpoint file (see the module's table); the message says what is wrong.
+pub fn decode(bytes: &[u8]) -> std::result::Result<(Header, SolverState), String> {
     if bytes.len() < MAGIC.len() + 8 + 32 || &bytes[..MAGIC.len()] != MAGIC {
         return Err("not a sticky-lips checkpoint (no STICKYLIPS-CKPT1 at its start)".into());
     }

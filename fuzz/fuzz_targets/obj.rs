@@ -1,0 +1,24 @@
+//! A quad-surface OBJ (what `extrude` and `face` read): parsed, and a surface it gives
+//! extruded into hexahedra and validated.
+#![no_main]
+use libfuzzer_sys::fuzz_target;
+#[path = "common.rs"]
+mod common;
+
+fuzz_target!(|data: &[u8]| {
+    common::init();
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let Ok(s) = sticky_lips::io::obj::parse_obj(text, "fuzz.obj") else {
+        return;
+    };
+    use sticky_lips::mesh::extrude;
+    let Ok(t) = extrude::group_thickness(&s, Some(0.001), &[], "fuzz.obj") else {
+        return;
+    };
+    if let Ok(mesh) = extrude::extrude_with(&s, &|g| t[g], extrude::Direction::Normal, "fuzz.obj")
+    {
+        let _ = mesh.validate("fuzz.obj");
+    }
+});
