@@ -476,7 +476,7 @@ fn command_line_values_are_checked() {
             "--out",
             blend_out.to_str().unwrap(),
         ],
-        "`nan` is not a weight",
+        "`nan` is not a finite number (PATH.vtu=WEIGHT)",
     );
     assert!(!blend_out.join("frames.pvd").exists());
     // a surface 1 cm across extruded by 1e300 m
@@ -716,5 +716,63 @@ fn a_killed_run_restarted_from_its_checkpoint_gives_the_uninterrupted_frames() {
         }
     }
     assert_eq!(frames, 101);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Every case of `verification/catalogue/cases.toml` (the malformed inputs of issue 15 and the
+/// fuzz targets' finds) run through the command line: the exit status and message it lists,
+/// no panic or abort, and no output directory left behind.
+#[test]
+fn catalogue_of_malformed_inputs() {
+    #[derive(serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Case {
+        what: String,
+        source: String,
+        args: Vec<String>,
+        exit: i32,
+        message: String,
+    }
+    #[derive(serde::Deserialize)]
+    struct Catalogue {
+        case: Vec<Case>,
+    }
+    let bin = env!("CARGO_BIN_EXE_sticky-lips");
+    let cat = Path::new(env!("CARGO_MANIFEST_DIR")).join("verification/catalogue");
+    let text = std::fs::read_to_string(cat.join("cases.toml")).unwrap();
+    let catalogue: Catalogue = toml::from_str(&text).unwrap();
+    let dir = std::env::temp_dir().join(format!("sticky-lips-catalogue-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for (i, c) in catalogue.case.iter().enumerate() {
+        let out = dir.join(format!("out_{i}"));
+        let args: Vec<String> = c
+            .args
+            .iter()
+            .map(|a| {
+                a.replace("{cat}", cat.to_str().unwrap())
+                    .replace("{out}", out.to_str().unwrap())
+            })
+            .collect();
+        let o = std::process::Command::new(bin)
+            .args(&args)
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        let what = format!("case {i} ({}; {}): {}", c.what, c.source, args.join(" "));
+        assert_eq!(o.status.code(), Some(c.exit), "{what}\n{err}");
+        assert!(
+            err.contains(&c.message),
+            "{what}\nexpected `{}`\ngot {err}",
+            c.message
+        );
+        assert!(!err.contains("panicked"), "{what}\n{err}");
+        assert!(!out.exists(), "{what}: left {}", out.display());
+    }
+    println!(
+        "catalogue: {} malformed inputs refused",
+        catalogue.case.len()
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
