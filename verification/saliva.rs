@@ -7,8 +7,8 @@
 use std::f64::consts::PI;
 use sticky_lips::material::saliva::{
     across_direction, breaking_point, evaporation_rates, herz_knudsen_flux, moisture,
-    stretch_across, BreakingRule, Decay, EvaporationSchedule, MoistureMap, SalivaParams, AVOGADRO,
-    BOLTZMANN,
+    stretch_across, water_saturation_pressure, BreakingRule, Decay, EvaporationSchedule,
+    MoistureMap, SalivaParams, AVOGADRO, BOLTZMANN,
 };
 use sticky_lips::material::NeoHookean;
 use sticky_lips::mesh::generate::{block, SplitMix64};
@@ -52,10 +52,6 @@ fn wagner_pruss(t: f64) -> f64 {
 
 /// The same from Buck (1996), `p = 611.21 exp((18.678 - T/234.5)(T/(257.14 + T)))` Pa with
 /// `T` in degrees Celsius: a second, independent correlation to cross-check the first.
-fn buck(celsius: f64) -> f64 {
-    611.21 * ((18.678 - celsius / 234.5) * (celsius / (257.14 + celsius))).exp()
-}
-
 fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }
@@ -67,7 +63,21 @@ fn herz_knudsen_water_at_lip_temperature() {
     let p_liq = wagner_pruss(t_lip); // Pa, saturation pressure of the liquid at 34 C
     let p_eq = 0.5 * wagner_pruss(273.15 + 22.0); // Pa, partial pressure of vapour in the room
                                                   // Buck (1996) states < 0.05 % error over 0..50 C against the IAPWS formulation; 0.1 % margin
-    assert!(rel(buck(34.0), p_liq) < 1e-3 && rel(buck(22.0), 2.0 * p_eq) < 1e-3);
+    assert!(
+        rel(water_saturation_pressure(34.0), p_liq) < 1e-3
+            && rel(water_saturation_pressure(22.0), 2.0 * p_eq) < 1e-3
+    );
+    // the library's Buck equation (the `evaporation` command's p_liq) over its whole range
+    let worst = (0..=50)
+        .map(|c| {
+            rel(
+                water_saturation_pressure(c as f64),
+                wagner_pruss(273.15 + c as f64),
+            )
+        })
+        .fold(0.0, f64::max);
+    println!("water_saturation_pressure: max |Buck / Wagner-Pruss - 1| over 0..50 C = {worst:.1e}");
+    assert!(worst < 1e-3, "{worst:e}");
     // and the correlation itself: the IAPWS value at 100 C is 101.418 kPa (4 digits quoted)
     assert!(rel(wagner_pruss(373.15), 101_418.0) < 1e-5);
 
@@ -434,6 +444,103 @@ fn across_direction_finds_the_thin_direction() {
 }
 
 #[test]
+fn saliva_moisture_maps_give_their_values_at_centroids() {
+    // The initial moisture of each saliva element (0M of eq. 6) from the scenario's maps, at
+    // centroids whose coordinate along a skew axis is binary-exact: along = c . axis.
+    let axis = [0.5, 0.25, 2.0];
+    let at = |x: f64| [x, 2.0 * x, 0.125 * x]; // along = 0.5x + 0.5x + 0.25x = 1.25 x
+    let eq = |m: &MoistureMap, x: f64, want: f64| {
+        let got = m.value(&at(x), 0);
+        assert_eq!(got, want, "{m:?} at along = {}", 1.25 * x);
+    };
+    eq(&MoistureMap::Constant(90.0), 3.0, 90.0);
+    // linear from 100 at along = 0.5 to 60 at along = 2.5, clamped outside
+    let g = MoistureMap::Gradient {
+        axis,
+        positions: (0.5, 2.5),
+        values: (100.0, 60.0),
+    };
+    for (x, want) in [
+        (-8.0, 100.0),
+        (0.25, 100.0),
+        (1.0, 85.0),
+        (1.5, 72.5),
+        (2.0, 60.0),
+        (8.0, 60.0),
+    ] {
+        eq(&g, x, want);
+    }
+    // bands: below 0, [0, 1.25), from 1.25 (an edge belongs to the band above it)
+    let b = MoistureMap::Bands {
+        axis,
+        edges: vec![0.0, 1.25],
+        values: vec![10.0, 20.0, 30.0],
+    };
+    for (x, want) in [
+        (-0.8, 10.0),
+        (0.0, 20.0),
+        (0.8, 20.0),
+        (1.0, 30.0),
+        (4.0, 30.0),
+    ] {
+        eq(&b, x, want);
+    }
+    let lr = MoistureMap::LeftRight {
+        axis,
+        center: 1.25,
+        left: 95.0,
+        right: 105.0,
+    };
+    for (x, want) in [(-1.0, 95.0), (0.96, 95.0), (1.0, 105.0), (3.0, 105.0)] {
+        eq(&lr, x, want);
+    }
+    let per = MoistureMap::PerElement(vec![70.0, 80.0, 90.0]);
+    assert_eq!(per.value(&at(1.0), 2), 90.0);
+    assert_eq!(per.value(&at(1.0), 0), 70.0);
+    // what a map holds that is not a moisture (negative, not finite) is found for validation
+    let params = |m: MoistureMap| SalivaParams {
+        initial_moisture: m,
+        ..saliva_params(90.0, 0.1, BreakingRule::Literal, Decay::PerStep(0.99))
+    };
+    assert_eq!(
+        params(MoistureMap::Constant(90.0)).initial_moisture_values_invalid(),
+        None
+    );
+    assert_eq!(
+        params(MoistureMap::Constant(0.0)).initial_moisture_values_invalid(),
+        None
+    );
+    assert_eq!(
+        params(MoistureMap::Constant(-1.0)).initial_moisture_values_invalid(),
+        Some(-1.0)
+    );
+    let bad = params(MoistureMap::Gradient {
+        axis,
+        positions: (0.0, 1.0),
+        values: (10.0, -2.0),
+    });
+    assert_eq!(bad.initial_moisture_values_invalid(), Some(-2.0));
+    let bad = params(MoistureMap::Bands {
+        axis,
+        edges: vec![0.0],
+        values: vec![1.0, f64::INFINITY],
+    });
+    assert_eq!(bad.initial_moisture_values_invalid(), Some(f64::INFINITY));
+    let bad = params(MoistureMap::LeftRight {
+        axis,
+        center: 0.0,
+        left: -3.0,
+        right: 1.0,
+    });
+    assert_eq!(bad.initial_moisture_values_invalid(), Some(-3.0));
+    let bad = params(MoistureMap::PerElement(vec![1.0, 2.0, -4.0]));
+    assert_eq!(bad.initial_moisture_values_invalid(), Some(-4.0));
+    assert!(params(MoistureMap::Constant(f64::NAN))
+        .initial_moisture_values_invalid()
+        .is_some_and(f64::is_nan));
+}
+
+#[test]
 fn across_direction_ties_pick_the_first_axis() {
     // An axis-aligned box numbered like the natural element: the Jacobian's columns are its
     // half sizes along x, y, z. Lengths within 1e-12 (relative) of the shortest so far count as
@@ -443,11 +550,13 @@ fn across_direction_ties_pick_the_first_axis() {
         std::array::from_fn(|a| std::array::from_fn(|i| h[i] * NATURAL[a][i]))
     };
     let l = 1e-3;
-    let cases: [([f64; 3], [f64; 3]); 6] = [
+    let cases: [([f64; 3], [f64; 3]); 7] = [
         // an exact cube: the first axis
         ([l, l, l], [1.0, 0.0, 0.0]),
         // the second and third shorter by 1e-13 and 5e-13: still ties, the first axis
         ([l, l * (1.0 - 1e-13), l * (1.0 - 5e-13)], [1.0, 0.0, 0.0]),
+        // the second exactly at the tolerance (the same product as the code forms): a tie
+        ([l, l * (1.0 - 1e-12), l], [1.0, 0.0, 0.0]),
         // the third shorter by 1e-10 than the tied first two: the third
         ([l, l * (1.0 - 1e-13), l * (1.0 - 1e-10)], [0.0, 0.0, 1.0]),
         // the second clearly shortest

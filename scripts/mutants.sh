@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Mutation testing of the physics with cargo-mutants (crates.io): every mutant of the named
+# files is built and tested; a mutant no test fails is "missed". The equivalent mutants (no
+# test can tell them apart from the code) are listed with their reasons in
+# verification/README.md.
+#
+#   bash scripts/mutants.sh                      # the saliva files, tested by the saliva tests
+#   MUTANTS_FILES="src/tled/node_update.rs" MUTANTS_TESTS="" bash scripts/mutants.sh
+#   bash scripts/mutants.sh --iterate            # only the mutants not caught last time
+#
+# MUTANTS_FILES: the files to mutate; MUTANTS_TESTS: a test-name filter for the unit tests and
+# the verification target (empty: all of them). Mutants build with the `mutants` profile
+# (opt-level 1, no debug info, no GPU feature: a mutant rebuilds in seconds). Results:
+# target/mutants-out/mutants.out/{caught,missed,unviable,timeout}.txt.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+FILES=${MUTANTS_FILES:-"src/material/saliva.rs src/tled/saliva_forces.rs"}
+FILTER=${MUTANTS_TESTS-saliva}
+if ! command -v cargo-mutants >/dev/null; then
+  cargo install cargo-mutants --locked --version 27.1.0
+fi
+# one target directory for the copies cargo-mutants builds in: the dependencies are built once
+export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-$PWD/target}
+args=()
+for f in $FILES; do args+=(-f "$f"); done
+filter=()
+[ -n "$FILTER" ] && filter=(-- "$FILTER")
+mkdir -p target/mutants-out
+cargo mutants --profile mutants --no-default-features "${args[@]}" "$@" \
+  --output target/mutants-out --timeout 300 \
+  -- --lib --test verification "${filter[@]}"
