@@ -5,11 +5,12 @@
 # verification/README.md.
 #
 #   bash scripts/mutants.sh                      # the saliva files, tested by the saliva tests
-#   MUTANTS_FILES="src/tled/node_update.rs" MUTANTS_TESTS="" bash scripts/mutants.sh
+#   MUTANTS_FILES="src/tled/node_update.rs" MUTANTS_TESTS="tled:: time_integration" bash scripts/mutants.sh
 #   bash scripts/mutants.sh --iterate            # only the mutants not caught last time
 #
-# MUTANTS_FILES: the files to mutate; MUTANTS_TESTS: a test-name filter for the unit tests and
-# the verification target (empty: all of them). Mutants build with the `mutants` profile
+# MUTANTS_FILES: the files to mutate; MUTANTS_TESTS: test-name filters (space-separated, a test
+# runs when its name contains one of them) for the unit tests and the verification target
+# (empty: all of them). Mutants build with the `mutants` profile
 # (opt-level 1, no debug info, no GPU feature: a mutant rebuilds in seconds). Results:
 # target/mutants-out/mutants.out/{caught,missed,unviable,timeout}.txt.
 set -euo pipefail
@@ -24,7 +25,8 @@ export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-$PWD/target}
 args=()
 for f in $FILES; do args+=(-f "$f"); done
 filter=()
-[ -n "$FILTER" ] && filter=(-- "$FILTER")
+# shellcheck disable=SC2206
+[ -n "$FILTER" ] && filter=(-- $FILTER)
 mkdir -p target/mutants-out
 cargo mutants --profile mutants --no-default-features "${args[@]}" "$@" \
   --output target/mutants-out --timeout 300 \

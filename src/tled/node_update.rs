@@ -142,3 +142,119 @@ pub fn gather_all<T: Real>(
         .map(|n| gather_node(gather, elem_f, n))
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate::SplitMix64;
+
+    /// A random model of `nodes` nodes (more than one `NODE_CHUNK`) and the node update's
+    /// inputs, all random.
+    struct Case {
+        elements: Vec<[u32; 8]>,
+        elem_f: Vec<[[f64; 3]; 8]>,
+        r: Vec<[f64; 3]>,
+        u: Vec<[f64; 3]>,
+        u_prev: Vec<[f64; 3]>,
+        cd: CentralDifference<f64>,
+    }
+
+    fn case(nodes: usize) -> Case {
+        let mut rng = SplitMix64(2026);
+        let elements: Vec<[u32; 8]> = (0..nodes / 2)
+            .map(|_| [0; 8].map(|_| (rng.next_u64() % nodes as u64) as u32))
+            .collect();
+        let mut v3 = |s: f64| [0; 3].map(|_| s * rng.symmetric());
+        let elem_f = (0..elements.len())
+            .map(|_| [0; 8].map(|_| v3(1.0)))
+            .collect();
+        let r = (0..nodes).map(|_| v3(0.5)).collect();
+        let u = (0..nodes).map(|_| v3(1e-3)).collect();
+        let u_prev = (0..nodes).map(|_| v3(1e-3)).collect();
+        let mass: Vec<f64> = (0..nodes).map(|i| 1e-3 * (1.0 + (i % 7) as f64)).collect();
+        Case {
+            elements,
+            elem_f,
+            r,
+            u,
+            u_prev,
+            cd: CentralDifference::new(1e-4, 50.0, &mass),
+        }
+    }
+
+    #[test]
+    fn every_node_of_every_chunk_follows_eq3() {
+        // 2 full chunks and a partial one; the reference sums each node's corners by scanning
+        // the elements in order (not through the gather lists) and applies eq. (3)'s
+        // increment form with the same operations, so the bits must agree
+        let n = 2 * NODE_CHUNK + 37;
+        let c = case(n);
+        let gather = NodeGather::new(n, &c.elements);
+        let mut out = vec![[0.0; 3]; n];
+        let none = node_update(
+            &gather,
+            &c.cd,
+            &c.elem_f,
+            Some(&c.r),
+            &c.u,
+            &c.u_prev,
+            &mut out,
+        );
+        assert_eq!(none, None);
+        let mut f = vec![[0.0f64; 3]; n];
+        for (e, conn) in c.elements.iter().enumerate() {
+            for (a, &node) in conn.iter().enumerate() {
+                for k in 0..3 {
+                    f[node as usize][k] += c.elem_f[e][a][k];
+                }
+            }
+        }
+        for i in 0..n {
+            for k in 0..3 {
+                let want = c.u[i][k]
+                    + c.cd.a[i] * (c.r[i][k] - f[i][k])
+                    + c.cd.c1 * (c.u[i][k] - c.u_prev[i][k]);
+                assert_eq!(
+                    out[i][k].to_bits(),
+                    want.to_bits(),
+                    "node {i}, component {k}"
+                );
+            }
+        }
+        // without external forces: R = 0
+        node_update(&gather, &c.cd, &c.elem_f, None, &c.u, &c.u_prev, &mut out);
+        let i = NODE_CHUNK + 3;
+        let want = c.u[i][1] + c.cd.a[i] * (0.0 - f[i][1]) + c.cd.c1 * (c.u[i][1] - c.u_prev[i][1]);
+        assert_eq!(out[i][1].to_bits(), want.to_bits());
+    }
+
+    #[test]
+    fn the_smallest_node_with_a_non_finite_component_is_reported() {
+        let n = 2 * NODE_CHUNK + 37;
+        let mut c = case(n);
+        let gather = NodeGather::new(n, &c.elements);
+        let mut out = vec![[0.0; 3]; n];
+        let mut run = |c: &Case| {
+            node_update(
+                &gather,
+                &c.cd,
+                &c.elem_f,
+                Some(&c.r),
+                &c.u,
+                &c.u_prev,
+                &mut out,
+            )
+        };
+        // one component of one node, in the second chunk: that node
+        c.r[NODE_CHUNK + 5][2] = f64::INFINITY;
+        assert_eq!(run(&c), Some(NODE_CHUNK + 5));
+        // two more in the same chunk and one in the third, each in one component: the smallest
+        c.r[NODE_CHUNK + 9][0] = f64::NAN;
+        c.r[NODE_CHUNK + 2][1] = f64::NEG_INFINITY;
+        c.r[2 * NODE_CHUNK + 1][0] = f64::NAN;
+        assert_eq!(run(&c), Some(NODE_CHUNK + 2));
+        // and one in the first chunk beats them all
+        c.u_prev[7][1] = f64::NAN;
+        assert_eq!(run(&c), Some(7));
+    }
+}
