@@ -246,6 +246,30 @@ pub fn element_forces_scalar<T: Real>(
 mod tests {
     use super::*;
 
+    #[test]
+    fn a_flattened_element_with_det_f_exactly_zero_is_reported() {
+        // the unit cube at its centre: D_a = xi_a / 4; u = (0, 0, -Z) flattens it onto z = 0,
+        // H = diag(0, 0, -1) and J = det(I + H) = 0 exactly: degenerate, not a valid state
+        use crate::element::hex8::NATURAL;
+        let (mut el, _) = random_case::<f64>(1, 8, 3);
+        el.conn = vec![[0, 1, 2, 3, 4, 5, 6, 7]];
+        el.dhdx = vec![std::array::from_fn(|a| NATURAL[a].map(|x| x / 4.0))];
+        assert!(!el.is_empty() && el.len() == 1);
+        let u: Vec<[f64; 3]> = (0..8)
+            .map(|a| [0.0, 0.0, -(1.0 + NATURAL[a][2]) / 2.0])
+            .collect();
+        let mut out = vec![[[0.0; 3]; 8]];
+        assert_eq!(element_forces_scalar(&el, &u, &mut out), Some(0));
+        // half flattened: J = 1/2, valid
+        let half: Vec<[f64; 3]> = u.iter().map(|v| [0.0, 0.0, v[2] / 2.0]).collect();
+        assert_eq!(element_forces_scalar(&el, &half, &mut out), None);
+        let none = ElementArrays::<f64> {
+            conn: vec![],
+            ..el.clone()
+        };
+        assert!(none.is_empty());
+    }
+
     fn lcg(s: &mut u64) -> f64 {
         *s = s
             .wrapping_mul(6_364_136_223_846_793_005)
