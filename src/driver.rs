@@ -411,9 +411,7 @@ fn run_with<S: Stepper>(
             .iter()
             .map(|e| (e.time, e.file.clone()))
             .collect();
-        let saved = history.stepping_time;
-        history.stepping_time += stepping;
-        let header = checkpoint::Header {
+        let mut header = checkpoint::Header {
             format: checkpoint::FORMAT,
             precision: sim.precision_name().into(),
             problem_hash: hash.clone(),
@@ -423,7 +421,8 @@ fn run_with<S: Stepper>(
             num_saliva: state.broken.len(),
             history: history.clone(),
         };
-        history.stepping_time = saved;
+        // the stepping before the checkpoint, this process's included
+        header.history.stepping_time += stepping;
         writer.checkpoint(checkpoint::encode(&header, &state))
     };
     while !sim.is_finished() {

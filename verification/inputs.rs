@@ -288,7 +288,7 @@ fn missing_file_is_an_io_error_naming_it() {
 /// or node, leaving only complete frames behind.
 #[test]
 fn unstable_time_step_is_refused_and_a_forced_run_stops_cleanly() {
-    use sticky_lips::driver::{run, Progress, RunOptions};
+    use sticky_lips::driver::{run, RunOptions};
     use sticky_lips::Precision;
     let s = scenario::parse(
         &GOOD_TOML
@@ -298,16 +298,7 @@ fn unstable_time_step_is_refused_and_a_forced_run_stops_cleanly() {
     )
     .unwrap();
     let dir = std::env::temp_dir().join(format!("sticky-lips-unstable-{}", std::process::id()));
-    let mut opts = RunOptions {
-        out: dir.clone(),
-        precision: Precision::F64,
-        backend: sticky_lips::driver::Backend::Cpu,
-        threads: 1,
-        force_dt: false,
-        progress: Progress::Quiet,
-        checkpoint_every: None,
-        restart: false,
-    };
+    let mut opts = RunOptions::new(dir.clone(), Precision::F64, 1);
     let e = run(&s.problem, &opts).expect_err("must refuse").to_string();
     assert!(
         e.contains("exceeds the critical time step") && e.contains("limiting element is"),

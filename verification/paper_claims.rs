@@ -30,7 +30,7 @@ struct Run {
 /// them: the same scenario text, the same step count), else to a temporary directory that is
 /// removed afterwards.
 fn run(name: &str) -> Run {
-    use sticky_lips::driver::{self, Backend, Progress, RunOptions};
+    use sticky_lips::driver::{self, RunOptions};
     let spec = paper::spec(Model::Face, true, name).expect("a paper run");
     let (dir, keep) = match std::env::var_os("STICKY_LIPS_PAPER_RUNS") {
         Some(d) => (std::path::PathBuf::from(d).join(name), true),
@@ -45,16 +45,7 @@ fn run(name: &str) -> Run {
     sticky_lips::io::atomic::write_atomic(&dir.join("scenario.toml"), text.as_bytes()).unwrap();
     driver::run(
         &p,
-        &RunOptions {
-            out: dir.clone(),
-            precision: sticky_lips::Precision::F64,
-            backend: Backend::Cpu,
-            threads: 1,
-            force_dt: false,
-            progress: Progress::Quiet,
-            checkpoint_every: None,
-            restart: false,
-        },
+        &RunOptions::new(dir.clone(), sticky_lips::Precision::F64, 1),
     )
     .unwrap();
     let m: RunMeasures =

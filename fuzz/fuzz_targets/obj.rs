@@ -6,8 +6,7 @@ use libfuzzer_sys::fuzz_target;
 mod common;
 
 fuzz_target!(|data: &[u8]| {
-    common::init();
-    let Ok(text) = std::str::from_utf8(data) else {
+    let Some(text) = common::text(data) else {
         return;
     };
     let Ok(s) = sticky_lips::io::obj::parse_obj(text, "fuzz.obj") else {

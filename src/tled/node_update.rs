@@ -159,6 +159,24 @@ mod tests {
         cd: CentralDifference<f64>,
     }
 
+    impl Case {
+        /// `node_update` on this case, with or without its external forces.
+        fn update(&self, gather: &NodeGather, loads: bool) -> (Option<usize>, Vec<[f64; 3]>) {
+            let mut out = vec![[0.0; 3]; self.u.len()];
+            let r = loads.then_some(self.r.as_slice());
+            let bad = node_update(
+                gather,
+                &self.cd,
+                &self.elem_f,
+                r,
+                &self.u,
+                &self.u_prev,
+                &mut out,
+            );
+            (bad, out)
+        }
+    }
+
     fn case(nodes: usize) -> Case {
         let mut rng = SplitMix64(2026);
         let elements: Vec<[u32; 8]> = (0..nodes / 2)
@@ -190,16 +208,7 @@ mod tests {
         let n = 2 * NODE_CHUNK + 37;
         let c = case(n);
         let gather = NodeGather::new(n, &c.elements);
-        let mut out = vec![[0.0; 3]; n];
-        let none = node_update(
-            &gather,
-            &c.cd,
-            &c.elem_f,
-            Some(&c.r),
-            &c.u,
-            &c.u_prev,
-            &mut out,
-        );
+        let (none, out) = c.update(&gather, true);
         assert_eq!(none, None);
         let mut f = vec![[0.0f64; 3]; n];
         for (e, conn) in c.elements.iter().enumerate() {
@@ -222,7 +231,7 @@ mod tests {
             }
         }
         // without external forces: R = 0
-        node_update(&gather, &c.cd, &c.elem_f, None, &c.u, &c.u_prev, &mut out);
+        let (_, out) = c.update(&gather, false);
         let i = NODE_CHUNK + 3;
         let want = c.u[i][1] + c.cd.a[i] * (0.0 - f[i][1]) + c.cd.c1 * (c.u[i][1] - c.u_prev[i][1]);
         assert_eq!(out[i][1].to_bits(), want.to_bits());
@@ -233,18 +242,7 @@ mod tests {
         let n = 2 * NODE_CHUNK + 37;
         let mut c = case(n);
         let gather = NodeGather::new(n, &c.elements);
-        let mut out = vec![[0.0; 3]; n];
-        let mut run = |c: &Case| {
-            node_update(
-                &gather,
-                &c.cd,
-                &c.elem_f,
-                Some(&c.r),
-                &c.u,
-                &c.u_prev,
-                &mut out,
-            )
-        };
+        let run = |c: &Case| c.update(&gather, true).0;
         // one component of one node, in the second chunk: that node
         c.r[NODE_CHUNK + 5][2] = f64::INFINITY;
         assert_eq!(run(&c), Some(NODE_CHUNK + 5));

@@ -416,16 +416,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
         } => {
             let (p, default_out) = load(&input)?;
             let out = out_dir(out, default_out, &input.input);
-            let opts = RunOptions {
-                out: out.clone(),
-                precision: Precision::F64,
-                backend: Backend::Cpu,
-                threads,
-                force_dt: false,
-                progress: Progress::Quiet,
-                checkpoint_every: None,
-                restart: false,
-            };
+            let opts = RunOptions::new(out.clone(), Precision::F64, threads);
             let so = StaticOptions {
                 load_steps,
                 ..Default::default()
