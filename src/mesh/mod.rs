@@ -6,6 +6,7 @@ pub mod extrude;
 pub mod face;
 pub mod generate;
 pub mod mouth;
+pub mod skin;
 pub mod surface;
 
 use crate::element::hex8;

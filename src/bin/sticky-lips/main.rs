@@ -3,6 +3,7 @@
 //! COMMAND` prints each one's options, and README.md shows them in use.
 
 mod paper;
+mod preview;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::IsTerminal;
@@ -82,8 +83,8 @@ enum Command {
     /// Explicit dynamic run (TLED, central differences).
     Run {
         /// A scenario (.toml) or a NiftySim model (.xml); with --restart, the checkpoint's
-        /// input when not given.
-        #[arg(required_unless_present = "restart")]
+        /// input when not given; else the default job: the sticky lips opening on the
+        /// MakeHuman face (Table 1 at the quick resolution), written to out/face.
         input: Option<PathBuf>,
         /// Reproduce NiftySim: centroid gradients and its timing quirks (XML input only).
         #[arg(long)]
@@ -104,9 +105,9 @@ enum Command {
         /// Where the steps run (the GPU runs f32 everywhere, f64 where the adapter has SHADER_F64).
         #[arg(long, value_enum, default_value = "cpu")]
         backend: BackendArg,
-        /// Worker threads (results are bit-identical for any count).
-        #[arg(long, default_value_t = 1, value_parser = threads_arg)]
-        threads: usize,
+        /// Worker threads (default: every core; results are bit-identical for any count).
+        #[arg(long, value_parser = threads_arg)]
+        threads: Option<usize>,
         /// Run even if the time step exceeds the critical time step.
         #[arg(long)]
         force_dt: bool,
@@ -120,8 +121,9 @@ enum Command {
         input: InputArgs,
         #[arg(long)]
         out: Option<PathBuf>,
-        #[arg(long, default_value_t = 1, value_parser = threads_arg)]
-        threads: usize,
+        /// Worker threads (default: every core).
+        #[arg(long, value_parser = threads_arg)]
+        threads: Option<usize>,
         /// Load steps.
         #[arg(long, default_value_t = 10)]
         load_steps: usize,
@@ -236,8 +238,9 @@ enum Command {
         /// Make only these figures (e.g. --only fig4 --only sweep) and only their runs.
         #[arg(long)]
         only: Vec<String>,
-        #[arg(long, default_value_t = 2, value_parser = threads_arg)]
-        threads: usize,
+        /// Worker threads (default: every core).
+        #[arg(long, value_parser = threads_arg)]
+        threads: Option<usize>,
         /// Where the runs step (see `run --backend`).
         #[arg(long, value_enum, default_value = "cpu")]
         backend: BackendArg,
@@ -258,6 +261,16 @@ enum Command {
         shapes: Vec<String>,
         #[arg(long)]
         out: PathBuf,
+    },
+    /// Write a finished or interrupted run's animation files again: skin.obj, skin.pc2,
+    /// skin.mdd, skin.usda (the user's mesh moved by the model) and the preview, from the
+    /// frames in RUN_DIR (mouth and face models).
+    Export {
+        /// The run's directory (frames.pvd and its frames).
+        run_dir: PathBuf,
+        /// The scenario the run solved (default: the `input` of RUN_DIR/summary.json).
+        #[arg(long)]
+        scenario: Option<PathBuf>,
     },
 }
 
@@ -355,7 +368,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                 input: match (input, &restart) {
                     (Some(i), _) => i,
                     (None, Some(dir)) => checkpoint_input(dir)?,
-                    (None, None) => unreachable!("clap requires one of the two"),
+                    (None, None) => default_job(out.as_deref())?,
                 },
                 niftysim_compat,
             };
@@ -386,11 +399,12 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                 out: out.clone(),
                 precision: precision.precision(),
                 backend: backend.backend(),
-                threads,
+                threads: all_cores(threads),
                 force_dt,
                 progress,
                 checkpoint_every,
                 restart: restart.is_some(),
+                export: true,
             };
             let s = driver::run(&p, &opts)?;
             println!(
@@ -407,6 +421,18 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                 s.threads,
                 if s.threads == 1 { "" } else { "s" }
             );
+            if let Some(e) = &s.export {
+                let t = std::time::Instant::now();
+                preview::write(&p, &out)?;
+                println!(
+                    "{}: skin.obj, skin.pc2, skin.mdd, skin.usda ({} frames of {} vertices; {:.2} s) and preview.png, preview_sheet.png ({:.2} s)",
+                    out.display(),
+                    e.frames,
+                    e.vertices,
+                    e.read_seconds + e.write_seconds,
+                    t.elapsed().as_secs_f64()
+                );
+            }
         }
         Command::Equilibrium {
             input,
@@ -416,7 +442,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
         } => {
             let (p, default_out) = load(&input)?;
             let out = out_dir(out, default_out, &input.input);
-            let opts = RunOptions::new(out.clone(), Precision::F64, threads);
+            let opts = RunOptions::new(out.clone(), Precision::F64, all_cores(threads));
             let so = StaticOptions {
                 load_steps,
                 ..Default::default()
@@ -454,6 +480,34 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             )?;
         }
         Command::Blend { input, shapes, out } => blend(&input, &shapes, &out)?,
+        Command::Export { run_dir, scenario } => {
+            let input = InputArgs {
+                input: match scenario {
+                    Some(s) => s,
+                    None => run_input(&run_dir)?,
+                },
+                niftysim_compat: false,
+            };
+            let (p, _) = load(&input)?;
+            let Some(skin) = &p.physics.skin else {
+                return Err(sticky_lips::Error::input(
+                    input.input.display().to_string(),
+                    sticky_lips::error::Location::Field("mesh.generator".into()),
+                    "only mouth and face models have a skin to export",
+                ));
+            };
+            let e = sticky_lips::export::export(skin, &run_dir)?;
+            preview::write(&p, &run_dir)?;
+            println!(
+                "export: {} frames of {} vertices ({} over the model, {} beside it, {} following the jaw) to {}",
+                e.frames,
+                e.vertices,
+                e.tied[0],
+                e.tied[1],
+                e.tied[2],
+                run_dir.display()
+            );
+        }
         Command::Paper {
             out,
             quick,
@@ -472,7 +526,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             paper::paper(&paper::PaperOptions {
                 out,
                 quick,
-                threads,
+                threads: all_cores(threads),
                 backend: backend.backend(),
                 precision: precision.precision(),
                 progress,
@@ -632,10 +686,63 @@ fn steps_arg(s: &str) -> Result<usize, String> {
 }
 
 /// The input file a checkpoint in `dir` was written for.
+/// `sticky-lips run` without an input: the sticky lips opening on the MakeHuman face (the
+/// paper's `fig4_sticky` run at `--quick` resolution: Table 1, the wide jaw opening), its
+/// scenario written to `OUT/scenario.toml` (OUT: `--out`, else `out/face`) and run from there.
+fn default_job(out: Option<&Path>) -> sticky_lips::Result<PathBuf> {
+    use sticky_lips::paper::{scenario_of, spec, Model};
+    let dir = out.map_or_else(|| PathBuf::from("out/face"), Path::to_path_buf);
+    let path = dir.join("scenario.toml");
+    let run = spec(Model::Face, true, "fig4_sticky").expect("the paper defines fig4_sticky");
+    let (text, _) = scenario_of(Model::Face, true, &run, &path)?;
+    let label = path.display().to_string();
+    let text = format!(
+        "# sticky-lips run (no input given): the sticky lips opening on the MakeHuman face, the\n\
+         # paper's run fig4_sticky at the quick resolution; `sticky-lips run {label}` repeats it.\n{}",
+        sticky_lips::io::scenario::with_overrides(
+            &text,
+            &label,
+            &[("output.dir", toml::Value::String(".".into()))],
+        )?
+    );
+    std::fs::create_dir_all(&dir).map_err(|e| sticky_lips::Error::io(&dir, e))?;
+    sticky_lips::io::atomic::write_atomic(&path, text.as_bytes())
+        .map_err(|e| sticky_lips::Error::io(&path, e))?;
+    Ok(path)
+}
+
+/// The input a finished or interrupted run in `dir` solved (its summary's `input`).
+fn run_input(dir: &Path) -> sticky_lips::Result<PathBuf> {
+    let path = dir.join("summary.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| sticky_lips::Error::io(&path, e))?;
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
+        sticky_lips::Error::input(
+            path.display().to_string(),
+            sticky_lips::error::Location::Line(e.line()),
+            e.to_string(),
+        )
+    })?;
+    v.get("input")
+        .and_then(|i| i.as_str())
+        .map(PathBuf::from)
+        .ok_or_else(|| {
+            sticky_lips::Error::field(
+                path.display().to_string(),
+                "input",
+                "missing: give the scenario with --scenario",
+            )
+        })
+}
+
 fn checkpoint_input(dir: &Path) -> sticky_lips::Result<PathBuf> {
     let path = dir.join(sticky_lips::io::checkpoint::FILE_NAME);
     let (header, _) = sticky_lips::io::checkpoint::read(&path)?;
     Ok(PathBuf::from(header.input))
+}
+
+/// The default of `--threads`: every core the process may use.
+fn all_cores(threads: Option<usize>) -> usize {
+    threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
 }
 
 /// `--threads N`: at least 1.
@@ -919,11 +1026,56 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
         })
         .collect();
     write_mesh_outputs(a.out, &model.mesh, &groups)?;
+    // a scenario that runs on it as it is: Table 1, the wide jaw opening with stickiness
+    let path = a.out.join("scenario.toml");
+    let label = path.display().to_string();
+    let text = format!(
+        "# sticky-lips face {}: Table 1 on this face (the paper's wide jaw opening with\n\
+         # stickiness); `sticky-lips run {label}`.\n{}",
+        a.input.display(),
+        scenario::with_overrides(
+            sticky_lips::paper::TABLE1,
+            sticky_lips::paper::TABLE1_NAME,
+            &[
+                ("mesh.file", toml::Value::String(".".into())),
+                ("mesh.face.resolution", toml::Value::Float(a.resolution)),
+                ("output.dir", toml::Value::String("run".into())),
+                (
+                    "title",
+                    toml::Value::String(format!(
+                        "Table 1 on {}: wide jaw opening, with stickiness",
+                        a.input.display()
+                    )),
+                ),
+            ],
+        )?
+    );
+    let problem = scenario::parse(&text, &path)?.problem;
+    sticky_lips::io::atomic::write_atomic(&path, text.as_bytes())
+        .map_err(|e| Error::io(&path, e))?;
+    // and a picture of its material groups
+    if let Some(cols) = &problem.physics.lip_columns {
+        use paper::look::{element_codes, render, Paint, BLUE, GREEN, RED, WHITE};
+        let codes = element_codes(&problem);
+        let colour = |e: u32| [BLUE, RED, GREEN][codes[e as usize] as usize];
+        let zero = vec![[0.0; 3]; problem.mesh.nodes.len()];
+        let img = render(
+            &problem,
+            cols,
+            &zero,
+            &[],
+            Paint::Elements(&colour),
+            WHITE,
+            900,
+            560,
+        );
+        sticky_lips::render::save_png(&a.out.join("groups.png"), &img)?;
+    }
     for n in src.data.notes.iter().chain(&model.notes) {
         println!("face: {n}");
     }
     println!(
-        "face: wrote face.obj, face.json (the source) and model.obj, mesh.vtu, model.xml (resolution {}) to {} in {:.2} s",
+        "face: wrote face.obj, face.json, head.obj, head.json (the source), model.obj, mesh.vtu, model.xml (resolution {}), groups.png and scenario.toml to {} in {:.2} s",
         a.resolution,
         a.out.display(),
         t0.elapsed().as_secs_f64()

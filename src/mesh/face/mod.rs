@@ -22,7 +22,9 @@ pub mod prepare;
 pub mod topology;
 
 pub use build::{build, FaceModel, FaceParams};
-pub use prepare::{prepare, FaceData, FaceRig, FaceSource, InputFrame, PrepareParams};
+pub use prepare::{
+    prepare, FaceData, FaceRig, FaceSource, HeadMesh, InputFrame, InputUnits, PrepareParams,
+};
 
 use crate::error::{Error, Location, Result};
 use std::path::Path;
@@ -47,16 +49,107 @@ pub fn makehuman() -> Result<FaceSource> {
     )
 }
 
-/// Reads `face.obj` and `face.json` from a directory (as `sticky-lips face` writes them).
+/// `head.json`: the jaw weight of every vertex of `head.obj`.
+#[derive(serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HeadData {
+    source: String,
+    jaw_weight: Vec<f64>,
+}
+
+/// Reads `face.obj` and `face.json` from a directory (as `sticky-lips face` writes them), and
+/// `head.obj` with `head.json` where both are there.
 pub fn read_dir(dir: &Path) -> Result<FaceSource> {
     let (o, j) = (dir.join("face.obj"), dir.join("face.json"));
     let obj = std::fs::read_to_string(&o).map_err(|e| Error::io(&o, e))?;
     let json = std::fs::read_to_string(&j).map_err(|e| Error::io(&j, e))?;
-    parse(
+    let mut src = parse(
         &obj,
         &json,
         &o.display().to_string(),
         &j.display().to_string(),
+    )?;
+    let (ho, hj) = (dir.join("head.obj"), dir.join("head.json"));
+    if ho.exists() && hj.exists() {
+        let surface = crate::io::obj::read_obj(&ho)?;
+        let hname = hj.display().to_string();
+        let text = std::fs::read_to_string(&hj).map_err(|e| Error::io(&hj, e))?;
+        let data: HeadData = serde_json::from_str(&text)
+            .map_err(|e| Error::input(&hname, Location::Line(e.line()), e.to_string()))?;
+        let nv = surface.vertices.len();
+        if data.jaw_weight.len() != nv || data.jaw_weight.iter().any(|w| !w.is_finite()) {
+            return Err(Error::field(
+                &hname,
+                "jaw_weight",
+                format!(
+                    "must hold {nv} finite values (the vertices of {}), has {}",
+                    ho.display(),
+                    data.jaw_weight.len()
+                ),
+            ));
+        }
+        if let Some(i) = &src.data.input {
+            if i.vertices != nv {
+                return Err(Error::field(
+                    &hname,
+                    "jaw_weight",
+                    format!(
+                        "{} has {nv} vertices, face.json's input {}",
+                        ho.display(),
+                        i.vertices
+                    ),
+                ));
+            }
+        }
+        src.head = Some(HeadMesh {
+            surface,
+            jaw_weight: data.jaw_weight,
+        });
+    }
+    Ok(src)
+}
+
+/// The mesh a face model's point caches play ([`crate::mesh::skin`]): the whole input head
+/// where the face has it, else the kept skin (`face.obj`); in the input's units and axes
+/// where `face.json` records them, else in metres in the model frame.
+pub fn skin(src: &FaceSource, model: &FaceModel) -> Result<crate::mesh::skin::Skin> {
+    use crate::mesh::skin::{OutputFrame, Skin, SkinParams};
+    let frame = src
+        .data
+        .input
+        .as_ref()
+        .map_or_else(OutputFrame::metres, |i| i.output_frame());
+    let (name, mesh, jaw, front) = match &src.head {
+        Some(h) => {
+            // the kept skin is the front; the rest of the head inherits along its edges
+            let mut front = vec![false; h.surface.vertices.len()];
+            for &v in &src.data.source_vertex {
+                if let Some(f) = front.get_mut(v as usize) {
+                    *f = true;
+                }
+            }
+            (
+                format!("{} (the input head)", src.data.source),
+                h.surface.clone(),
+                h.jaw_weight.clone(),
+                Some(front),
+            )
+        }
+        None => (
+            format!("{} (face.obj)", src.data.source),
+            src.surface.clone(),
+            src.data.jaw_weight.clone(),
+            None,
+        ),
+    };
+    Skin::tie(
+        &name,
+        mesh,
+        &jaw,
+        &model.surface,
+        front.as_deref(),
+        frame,
+        &SkinParams::default(),
     )
 }
 
@@ -120,7 +213,11 @@ pub fn parse(obj: &str, json: &str, obj_name: &str, json_name: &str) -> Result<F
             "values must be finite",
         ));
     }
-    Ok(FaceSource { surface, data })
+    Ok(FaceSource {
+        surface,
+        data,
+        head: None,
+    })
 }
 
 /// The two files' texts: `face.obj` (written by [`crate::io::obj::write_obj_to`]) and
@@ -137,7 +234,20 @@ pub fn to_texts(src: &FaceSource) -> (String, String) {
 pub fn write_dir(dir: &Path, src: &FaceSource) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let (obj, json) = to_texts(src);
-    for (name, text) in [("face.obj", obj), ("face.json", json)] {
+    let mut files = vec![("face.obj", obj), ("face.json", json)];
+    if let Some(h) = &src.head {
+        let mut o = Vec::new();
+        crate::io::obj::write_obj_to(&mut o, &h.surface).expect("writing to memory");
+        let mut j = serde_json::to_string(&HeadData {
+            source: src.data.source.clone(),
+            jaw_weight: h.jaw_weight.clone(),
+        })
+        .expect("head data serialises");
+        j.push('\n');
+        files.push(("head.obj", String::from_utf8(o).expect("OBJ is UTF-8")));
+        files.push(("head.json", j));
+    }
+    for (name, text) in files {
         let p = dir.join(name);
         crate::io::atomic::write_atomic(&p, text.as_bytes()).map_err(|e| Error::io(&p, e))?;
     }

@@ -105,6 +105,54 @@ pub struct FaceSource {
     /// The kept skin: quads facing outward, groups `upper_face` and `lower_face`, UVs.
     pub surface: QuadSurface,
     pub data: FaceData,
+    /// The whole input head, where the face was made from one here (`head.obj`,
+    /// `head.json`): the mesh whose vertex order the point caches follow.
+    pub head: Option<HeadMesh>,
+}
+
+/// The input head in the model frame (metres), in the input's vertex order, with the rig's
+/// jaw weight of every vertex (0 where the rig gives none).
+#[derive(Clone, Debug, PartialEq)]
+pub struct HeadMesh {
+    pub surface: QuadSurface,
+    pub jaw_weight: Vec<f64>,
+}
+
+/// The input's unit and axes, recorded so that outputs go back into them (`face.json`'s
+/// `input`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InputUnits {
+    /// The unit's name (`m`, `dm`, `cm`, `mm`, `in`) and metres per unit.
+    pub unit: String,
+    pub scale: f64,
+    pub up: [f64; 3],
+    pub forward: [f64; 3],
+    /// Vertices of the input mesh.
+    pub vertices: usize,
+}
+
+impl InputUnits {
+    /// From the model frame back to the input's units and axes.
+    pub fn output_frame(&self) -> crate::mesh::skin::OutputFrame {
+        let f = InputFrame {
+            scale: self.scale,
+            up: self.up,
+            forward: self.forward,
+        };
+        crate::mesh::skin::OutputFrame {
+            scale: self.scale,
+            rows: f.rows(),
+            unit: match self.unit.as_str() {
+                "m" => "m",
+                "dm" => "dm",
+                "cm" => "cm",
+                "mm" => "mm",
+                "in" => "in",
+                _ => "unit",
+            },
+        }
+    }
 }
 
 /// `face.json`: the contours, rig data and landmarks of a [`FaceSource`], by vertex of
@@ -136,6 +184,10 @@ pub struct FaceData {
     pub source_vertex: Vec<u32>,
     /// What the pipeline decided, in words (contour found, counts, holes filled).
     pub notes: Vec<String>,
+    /// The input's unit and axes (absent in faces made before it was recorded: outputs are
+    /// then in metres in the model frame).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input: Option<InputUnits>,
 }
 
 /// A muscle's line on the skin.
@@ -199,6 +251,19 @@ impl InputFrame {
     }
     pub fn point(&self, p: [f64; 3]) -> [f64; 3] {
         self.vector(p)
+    }
+    /// The unit's name where it is one of `--units`' (else `unit`).
+    pub fn unit_name(&self) -> &'static str {
+        [
+            (1.0, "m"),
+            (0.1, "dm"),
+            (0.01, "cm"),
+            (0.001, "mm"),
+            (0.0254, "in"),
+        ]
+        .iter()
+        .find(|(s, _)| (self.scale - s).abs() <= 1e-12 * s)
+        .map_or("unit", |(_, n)| n)
     }
     pub fn vector(&self, p: [f64; 3]) -> [f64; 3] {
         let r = self.rows();
@@ -498,6 +563,7 @@ pub fn prepare(
         *v = frame.point(*v);
     }
     s.validate(file)?;
+    let head_model = s.clone();
     let adj = Adjacency::new(&s);
     let contour = find_contour(&s, &adj, params, file)?;
     let ring_edges: BTreeSet<Edge> = contour
@@ -701,10 +767,21 @@ pub fn prepare(
         targets,
         source_vertex: old_of,
         notes,
+        input: Some(InputUnits {
+            unit: frame.unit_name().to_string(),
+            scale: frame.scale,
+            up: frame.up,
+            forward: frame.forward,
+            vertices: nv_in,
+        }),
     };
     Ok(FaceSource {
         surface: surf,
         data,
+        head: Some(HeadMesh {
+            surface: head_model,
+            jaw_weight: rig.jaw_weight.clone().unwrap_or_else(|| vec![0.0; nv_in]),
+        }),
     })
 }
 

@@ -7,7 +7,7 @@
 //! their runs).
 
 mod figures;
-mod look;
+pub mod look;
 mod runs;
 
 pub use runs::Model;

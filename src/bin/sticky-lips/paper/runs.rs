@@ -92,6 +92,8 @@ pub fn run(opts: &PaperOptions, s: &Spec) -> Result<Run> {
                 progress: opts.progress,
                 checkpoint_every: None,
                 restart: false,
+                // the figures read the frames; caches of each run are `sticky-lips export`'s
+                export: false,
             },
         )?
     };

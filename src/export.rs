@@ -1,0 +1,242 @@
+//! A run's frames as files the animation packages play ([`crate::io::cache`]): the user's
+//! mesh ([`crate::mesh::skin::Skin`]) at rest as `skin.obj`, its vertices in every frame as
+//! `skin.pc2` and `skin.mdd`, and `skin.usda` with the mesh's points as time samples and the
+//! saliva layer's front faces with their state (`broken`, `moisture`) as per-face primvars.
+//!
+//! `export.json` says what was written (counts, seconds). Read from the run's directory
+//! (`frames.pvd` and the frames it lists), so it works on a finished run, on an interrupted
+//! one (every listed frame is complete), and again later (`sticky-lips export`). Positions
+//! are `f32` in the user's units and axes, the same values in every file.
+
+use crate::error::{Error, Location, Result};
+use crate::io::cache::{mdd_bytes, pc2_bytes, usda_text, UsdLayer, UsdMesh};
+use crate::mesh::skin::Skin;
+use std::path::Path;
+
+/// The files [`export`] writes (a new run into the directory removes old ones).
+pub const FILES: [&str; 7] = [
+    "export.json",
+    "skin.obj",
+    "skin.pc2",
+    "skin.mdd",
+    "skin.usda",
+    "preview.png",
+    "preview_sheet.png",
+];
+
+/// What [`export`] wrote.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ExportSummary {
+    pub frames: usize,
+    pub vertices: usize,
+    /// Vertices over the model, beside it, elsewhere ([`Skin::counts`]).
+    pub tied: [usize; 3],
+    pub saliva_faces: usize,
+    /// The skin is the model's own outer surface (its vertices are the first nodes).
+    pub skin_is_model: bool,
+    pub files: Vec<String>,
+    /// Seconds spent reading the frames, and writing the files.
+    pub read_seconds: f64,
+    pub write_seconds: f64,
+}
+
+/// The frames `frames.pvd` lists: `(time, file)`.
+pub fn read_pvd(dir: &Path) -> Result<Vec<(f64, String)>> {
+    let path = dir.join("frames.pvd");
+    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+    let name = path.display().to_string();
+    let doc = roxmltree::Document::parse(&text)
+        .map_err(|e| Error::input(&name, Location::None, e.to_string()))?;
+    let mut out = Vec::new();
+    for n in doc.descendants().filter(|n| n.has_tag_name("DataSet")) {
+        let line = doc.text_pos_at(n.range().start).row as usize;
+        let t = n
+            .attribute("timestep")
+            .and_then(|t| t.parse::<f64>().ok())
+            .filter(|t| t.is_finite())
+            .ok_or_else(|| {
+                Error::input(
+                    &name,
+                    Location::Line(line),
+                    "DataSet without a finite timestep",
+                )
+            })?;
+        let f = n
+            .attribute("file")
+            .filter(|f| !f.is_empty() && !f.contains('/') && !f.contains('\\'))
+            .ok_or_else(|| {
+                Error::input(
+                    &name,
+                    Location::Line(line),
+                    "DataSet without a file in this directory",
+                )
+            })?;
+        out.push((t, f.to_string()));
+    }
+    Ok(out)
+}
+
+/// Writes `skin.obj`, `skin.pc2`, `skin.mdd` and `skin.usda` into `dir` from its frames.
+pub fn export(skin: &Skin, dir: &Path) -> Result<ExportSummary> {
+    let t0 = std::time::Instant::now();
+    let entries = read_pvd(dir)?;
+    if entries.is_empty() {
+        return Err(Error::input(
+            dir.join("frames.pvd").display().to_string(),
+            Location::None,
+            "lists no frames",
+        ));
+    }
+    let to32 = |p: [f64; 3]| p.map(|x| x as f32);
+    let fr = &skin.frame;
+    let mut frames: Vec<Vec<[f32; 3]>> = Vec::with_capacity(entries.len());
+    let mut saliva_pts: Vec<Vec<[f32; 3]>> = Vec::with_capacity(entries.len());
+    let mut broken: Vec<Vec<f32>> = Vec::new();
+    let mut moisture: Vec<Vec<f32>> = Vec::new();
+    let mut saliva_quads: Vec<usize> = Vec::new();
+    let times: Vec<f64> = entries.iter().map(|e| e.0).collect();
+    let need = skin.max_node().map_or(0, |n| n as usize + 1);
+    for (k, (t, file)) in entries.iter().enumerate() {
+        let path = dir.join(file);
+        let (u, comps, n) = crate::io::vtu::read_point_data_f64(&path, "displacement")?;
+        if comps != 3 || n < need.max(skin.model.vertices.len()) {
+            return Err(Error::input(
+                path.display().to_string(),
+                Location::Field("displacement".into()),
+                format!(
+                    "has {n} points of {comps} components; the model has {} surface nodes",
+                    skin.model.vertices.len()
+                ),
+            ));
+        }
+        let u: Vec<[f64; 3]> = u.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        frames.push(skin.positions(&u, *t).into_iter().map(to32).collect());
+        // the saliva layer: the model quads whose element is a saliva element
+        let state = crate::io::vtu::read_cell_data(&path, "saliva_broken").ok();
+        if k == 0 {
+            if let Some((b, _, _)) = &state {
+                saliva_quads = (0..skin.model.quads.len().min(b.len()))
+                    .filter(|&q| b[q] >= 0.0)
+                    .collect();
+            }
+        }
+        if !saliva_quads.is_empty() {
+            let b = state.map(|s| s.0).unwrap_or_default();
+            let m = crate::io::vtu::read_cell_data(&path, "saliva_moisture")
+                .map(|s| s.0)
+                .unwrap_or_default();
+            broken.push(
+                saliva_quads
+                    .iter()
+                    .map(|&q| b.get(q).copied().unwrap_or(0.0) as f32)
+                    .collect(),
+            );
+            moisture.push(
+                saliva_quads
+                    .iter()
+                    .map(|&q| m.get(q).copied().unwrap_or(f64::NAN) as f32)
+                    .collect(),
+            );
+            saliva_pts.push(
+                skin.model
+                    .vertices
+                    .iter()
+                    .zip(&u)
+                    .map(|(x, d)| to32(fr.to_user([x[0] + d[0], x[1] + d[1], x[2] + d[2]])))
+                    .collect(),
+            );
+        }
+    }
+    let read_seconds = t0.elapsed().as_secs_f64();
+    let t1 = std::time::Instant::now();
+    // the rest mesh in the user's units and axes
+    let mut rest = skin.surface.clone();
+    for v in rest.vertices.iter_mut() {
+        *v = fr.to_user(*v);
+    }
+    let rest32: Vec<[f32; 3]> = rest.vertices.iter().map(|&p| to32(p)).collect();
+    let faces: Vec<Vec<u32>> = skin.surface.quads.iter().map(|q| q.to_vec()).collect();
+    let saliva_faces: Vec<Vec<u32>> = saliva_quads
+        .iter()
+        .map(|&q| skin.model.quads[q].to_vec())
+        .collect();
+    let model_rest: Vec<[f32; 3]> = skin
+        .model
+        .vertices
+        .iter()
+        .map(|&p| to32(fr.to_user(p)))
+        .collect();
+    let uv32: Option<Vec<[f32; 2]>> = skin
+        .surface
+        .uv
+        .as_ref()
+        .map(|uv| uv.iter().map(|t| [t[0] as f32, t[1] as f32]).collect());
+    let fps = if times.len() > 1 {
+        (times.len() - 1) as f64 / (times[times.len() - 1] - times[0])
+    } else {
+        1.0
+    };
+    let up_axis = if fr.rows[1][2].abs() > fr.rows[1][1].abs() {
+        "Z"
+    } else {
+        "Y"
+    };
+    let mut meshes = vec![UsdMesh {
+        name: "skin",
+        faces: &faces,
+        rest: &rest32,
+        frames: &frames,
+        uv: uv32.as_deref(),
+        face_data: vec![],
+    }];
+    if !saliva_faces.is_empty() {
+        meshes.push(UsdMesh {
+            name: "saliva",
+            faces: &saliva_faces,
+            rest: &model_rest,
+            frames: &saliva_pts,
+            uv: None,
+            face_data: vec![("broken", broken), ("moisture", moisture)],
+        });
+    }
+    let doc = format!(
+        "sticky-lips run: {} ({} frames, time code k = frame k, {} per simulated second)",
+        skin.name,
+        frames.len(),
+        fps
+    );
+    let usda = usda_text(&UsdLayer {
+        doc: &doc,
+        up_axis,
+        metres_per_unit: fr.scale,
+        frames_per_second: fps,
+        meshes,
+    });
+    let mut obj = Vec::new();
+    crate::io::obj::write_obj_to(&mut obj, &rest)
+        .map_err(|e| Error::io(dir.join("skin.obj"), e))?;
+    let files: [(&str, Vec<u8>); 4] = [
+        ("skin.obj", obj),
+        ("skin.pc2", pc2_bytes(&frames, 0.0)),
+        ("skin.mdd", mdd_bytes(&frames, &times)),
+        ("skin.usda", usda.into_bytes()),
+    ];
+    for (name, bytes) in &files {
+        let p = dir.join(name);
+        crate::io::atomic::write_atomic(&p, bytes).map_err(|e| Error::io(&p, e))?;
+    }
+    let summary = ExportSummary {
+        frames: frames.len(),
+        vertices: rest.vertices.len(),
+        tied: skin.counts,
+        saliva_faces: saliva_faces.len(),
+        skin_is_model: skin.surface.vertices == skin.model.vertices,
+        files: files.iter().map(|f| f.0.to_string()).collect(),
+        read_seconds,
+        write_seconds: t1.elapsed().as_secs_f64(),
+    };
+    let p = dir.join("export.json");
+    let json = serde_json::to_vec_pretty(&summary).expect("export summary serialises");
+    crate::io::atomic::write_atomic(&p, &json).map_err(|e| Error::io(&p, e))?;
+    Ok(summary)
+}
