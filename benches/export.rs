@@ -14,7 +14,8 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
-use sticky_lips::driver::{self, Precision, RunOptions};
+use sticky_lips::driver::{self, RunOptions};
+use sticky_lips::real::Precision;
 use sticky_lips::io::cache::{mdd_bytes, pc2_bytes, usda_text, UsdLayer, UsdMesh};
 use sticky_lips::paper::{scenario_of, spec, Model};
 use sticky_lips::tled::Simulation;
@@ -27,17 +28,22 @@ fn bench(c: &mut Criterion) {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
     let mut g = c.benchmark_group("export");
     g.sample_size(10);
-    pool.install(|| {
-        let mut sim = Simulation::<f64>::new(&problem).unwrap();
+    {
+        let mut sim = pool.install(|| Simulation::<f64>::new(&problem).unwrap());
         // into the opening, so that the state is a deformed one
-        for _ in 0..30_000 {
-            sim.step().unwrap();
-        }
+        pool.install(|| {
+            for _ in 0..30_000 {
+                sim.step().unwrap();
+            }
+        });
+        let every = problem.time.output_every;
         g.bench_function("frame_steps", |b| {
             b.iter(|| {
-                for _ in 0..problem.time.output_every {
-                    sim.step().unwrap();
-                }
+                pool.install(|| {
+                    for _ in 0..every {
+                        sim.step().unwrap();
+                    }
+                })
             })
         });
         let u = sim.displacement_f64();
@@ -73,7 +79,7 @@ fn bench(c: &mut Criterion) {
                 black_box((pc2.len(), mdd.len(), usda.len()))
             })
         });
-    });
+    }
     // a whole run, then its export
     let mut opts = RunOptions::new(&dir, Precision::F64, 2);
     opts.export = false;

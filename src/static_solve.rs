@@ -337,7 +337,7 @@ impl<'a> Model<'a> {
                 point: r.point,
                 axis: r.axis,
                 angle: lambda * r.angle,
-                curve: r.curve,
+                curve: r.curve.clone(),
             };
             for &n in &r.nodes {
                 v[n as usize] =

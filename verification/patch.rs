@@ -125,7 +125,7 @@ fn patch_problem(mesh: Mesh, variant: GradientVariant) -> sticky_lips::Problem {
             nodes: boundary.clone(),
             dof,
             values: boundary.iter().map(|&n| u[n as usize][dof]).collect(),
-            curve,
+            curve: curve.clone(),
         });
     }
     problem(mesh, variant, bc, time, 0.0)

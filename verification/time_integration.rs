@@ -77,7 +77,7 @@ fn convergence_problem(total_time: f64) -> Problem {
         duration: total_time,
     };
     // ~10 % shear at the end of the ramp: non-linear, but far from inversion
-    bc.forces.push(force(&top, 0, 5e-3, curve));
+    bc.forces.push(force(&top, 0, 5e-3, curve.clone()));
     bc.forces.push(force(&top, 2, 2e-3, curve));
     problem(
         mesh,
@@ -163,7 +163,7 @@ fn energy_drift(dt_fraction: f64) -> (f64, f64, f64, usize) {
     };
     let probe = cantilever(vec![], 0.0, 1e-3, 1.0);
     let tip = probe.mesh.node_sets["x_max"].clone();
-    let forces = vec![force(&tip, 2, -2e-3, step), force(&tip, 1, 1e-3, step)];
+    let forces = vec![force(&tip, 2, -2e-3, step.clone()), force(&tip, 1, 1e-3, step)];
     let p0 = cantilever(forces.clone(), 0.0, 1e-3, 1.0);
     let dtc = critical_dt(&p0);
     let t_end = 2.0; // s: ~15 periods of the first bending mode
@@ -387,7 +387,7 @@ fn damped_problem(damping: f64, dt: f64, t_load: f64, total_time: f64) -> Proble
         nodes: top.clone(),
         dof: 2,
         values: vec![0.15 * 0.03; top.len()],
-        curve: ramp,
+        curve: ramp.clone(),
     });
     let side_free: Vec<u32> = side.iter().copied().filter(|n| !top.contains(n)).collect();
     bc.forces.push(force(&side_free, 1, 2e-3, ramp));

@@ -2,6 +2,7 @@ pub mod args;
 pub mod atomic;
 pub mod cache;
 pub mod checkpoint;
+pub mod keys;
 pub mod niftysim;
 pub mod obj;
 pub mod output;

@@ -477,14 +477,14 @@ impl Ctx<'_> {
                             nodes: cnodes.clone(),
                             dof: d,
                             values: values.clone(),
-                            curve,
+                            curve: curve.clone(),
                         });
                     } else {
                         bc.forces.push(NodalForce {
                             nodes: cnodes.clone(),
                             dof: d,
                             values: values.clone(),
-                            curve,
+                            curve: curve.clone(),
                         });
                     }
                 }

@@ -179,7 +179,9 @@ pub struct MeshSection {
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct JawDef {
-    pub angle: f64,
+    /// The opening (rad) the curve's value multiplies; with keys, default 1 (the keys are
+    /// then the angle itself).
+    pub angle: Option<f64>,
     #[serde(flatten)]
     pub curve: CurveDef,
 }
@@ -255,6 +257,14 @@ pub struct CurveDef {
     pub start: Option<f64>,
     /// Duration (s), default the whole run.
     pub duration: Option<f64>,
+    /// Keyframes `[[time, value], ...]` (s), interpolated linearly: the curve's value over
+    /// time, in place of `shape`, `start` and `duration`.
+    pub keys: Option<Vec<[f64; 2]>>,
+    /// Keyframes from a file an animation package exported (CSV or JSON, `io::keys`),
+    /// relative to the scenario.
+    pub keys_file: Option<String>,
+    /// The keys' times are frame numbers at this rate (frames per second).
+    pub keys_fps: Option<f64>,
 }
 
 #[derive(Deserialize, Debug)]
@@ -505,6 +515,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
     add_node_sets(&mut mesh, &sf.node_sets, f, scale)?;
     let r = Reader {
         f,
+        base,
         mesh: &mesh,
         scale,
         total: sf.time.total,
@@ -778,6 +789,8 @@ fn add_node_sets(mesh: &mut Mesh, sets: &[NodeSetDef], f: &str, scale: f64) -> R
 /// load curve).
 struct Reader<'a> {
     f: &'a str,
+    /// The scenario's directory (files it names are relative to it).
+    base: &'a Path,
     mesh: &'a Mesh,
     scale: f64,
     total: f64,
@@ -818,6 +831,16 @@ impl Reader<'_> {
     }
 
     fn curve(&self, c: &CurveDef, field: &str, default: LoadShape) -> Result<LoadCurve> {
+        if c.keys.is_some() || c.keys_file.is_some() {
+            return self.keyed_curve(c, field);
+        }
+        if c.keys_fps.is_some() {
+            return Err(Error::field(
+                self.f,
+                format!("{field}.keys_fps"),
+                "applies to keys or keys_file",
+            ));
+        }
         let shape = match &c.shape {
             None => default,
             Some(s) => LoadShape::parse(s).ok_or_else(|| {
@@ -843,6 +866,71 @@ impl Reader<'_> {
             shape,
             start,
             duration,
+        })
+    }
+
+    /// A curve given by keyframes (`keys` or `keys_file`).
+    fn keyed_curve(&self, c: &CurveDef, field: &str) -> Result<LoadCurve> {
+        for (name, set) in [
+            ("shape", c.shape.is_some()),
+            ("start", c.start.is_some()),
+            ("duration", c.duration.is_some()),
+        ] {
+            if set {
+                return Err(Error::field(
+                    self.f,
+                    format!("{field}.{name}"),
+                    "keys replace shape, start and duration: give one or the other",
+                ));
+            }
+        }
+        let (keys, label, key_field) = match (&c.keys, &c.keys_file) {
+            (Some(_), Some(_)) => {
+                return Err(Error::field(
+                    self.f,
+                    format!("{field}.keys_file"),
+                    "give keys or keys_file, not both",
+                ))
+            }
+            (Some(k), None) => {
+                let scale = c.keys_fps.map_or(1.0, |f| 1.0 / f);
+                if let Some(f) = c.keys_fps {
+                    if !(f.is_finite() && f > 0.0) {
+                        return Err(Error::field(
+                            self.f,
+                            format!("{field}.keys_fps"),
+                            format!("must be a positive frame rate, got {f}"),
+                        ));
+                    }
+                }
+                (
+                    k.iter().map(|p| (p[0] * scale, p[1])).collect(),
+                    self.f.to_string(),
+                    format!("{field}.keys"),
+                )
+            }
+            (None, Some(file)) => {
+                let path = self.base.join(file);
+                let k = crate::io::keys::read_keys(&path, c.keys_fps).map_err(|e| {
+                    match e {
+                        Error::Io { .. } => Error::field(
+                            self.f,
+                            format!("{field}.keys_file"),
+                            e.to_string(),
+                        ),
+                        e => e,
+                    }
+                })?;
+                (k, path.display().to_string(), format!("{field}.keys_file"))
+            }
+            (None, None) => unreachable!("called with keys"),
+        };
+        let k = crate::problem::boundary::Keyframes::new(keys)
+            .map_err(|m| Error::field(&label, key_field, m))?;
+        Ok(LoadCurve {
+            shape: LoadShape::Keyed(std::sync::Arc::new(k)),
+            start: 0.0,
+            duration: self.total,
         })
     }
 
@@ -946,8 +1034,20 @@ impl Reader<'_> {
                     "[jaw] needs a mouth model (generator `mouth` or `face`)",
                 )
             })?;
+            let keyed = j.curve.keys.is_some() || j.curve.keys_file.is_some();
+            let angle = match (j.angle, keyed) {
+                (Some(a), _) => a,
+                (None, true) => 1.0,
+                (None, false) => {
+                    return Err(Error::field(
+                        f,
+                        "jaw.angle",
+                        "required (the opening in rad), unless keys give the angle over time",
+                    ))
+                }
+            };
             bc.rotations.push(
-                model.jaw_rotation(j.angle, self.curve(&j.curve, "jaw", LoadShape::SmoothStep)?),
+                model.jaw_rotation(angle, self.curve(&j.curve, "jaw", LoadShape::SmoothStep)?),
             );
         }
         if let Some(g) = &sf.gravity {

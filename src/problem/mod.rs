@@ -285,10 +285,10 @@ impl Problem {
         for c in bc
             .displacements
             .iter()
-            .map(|c| c.curve)
-            .chain(bc.rotations.iter().map(|c| c.curve))
-            .chain(bc.forces.iter().map(|c| c.curve))
-            .chain(bc.gravity.iter().map(|c| c.curve))
+            .map(|c| &c.curve)
+            .chain(bc.rotations.iter().map(|c| &c.curve))
+            .chain(bc.forces.iter().map(|c| &c.curve))
+            .chain(bc.gravity.iter().map(|c| &c.curve))
         {
             finite("start".into(), &[c.start])?;
         }
@@ -309,10 +309,10 @@ impl Problem {
         let curves = bc
             .displacements
             .iter()
-            .map(|c| c.curve)
-            .chain(bc.rotations.iter().map(|c| c.curve))
-            .chain(bc.forces.iter().map(|c| c.curve))
-            .chain(bc.gravity.iter().map(|c| c.curve));
+            .map(|c| &c.curve)
+            .chain(bc.rotations.iter().map(|c| &c.curve))
+            .chain(bc.forces.iter().map(|c| &c.curve))
+            .chain(bc.gravity.iter().map(|c| &c.curve));
         for c in curves {
             if !pos(c.duration) {
                 return Err(Error::field(

@@ -159,7 +159,7 @@ impl Discretisation {
                 })
                 .collect();
             d.loads.push(LoadGroup {
-                curve: m.curve,
+                curve: m.curve.clone(),
                 entries,
             });
             d.muscle_nodes.push(nodes);
@@ -245,7 +245,7 @@ fn plan_constraints(p: &Problem) -> ConstraintPlan {
             .map(|(&n, &v)| (3 * n + pd.dof as u32, v))
             .collect();
         c.prescribed_dofs.extend(entries.iter().map(|e| e.0));
-        c.prescribed.push((pd.curve, entries));
+        c.prescribed.push((pd.curve.clone(), entries));
     }
     c.prescribed_dofs.sort_unstable();
     c.prescribed_dofs.dedup();
@@ -273,7 +273,7 @@ fn plan_loads(p: &Problem, mass: &[f64]) -> Vec<LoadGroup> {
             .map(|(&n, &v)| (3 * n + f.dof as u32, v))
             .collect();
         groups.push(LoadGroup {
-            curve: f.curve,
+            curve: f.curve.clone(),
             entries,
         });
     }
@@ -291,7 +291,7 @@ fn plan_loads(p: &Problem, mass: &[f64]) -> Vec<LoadGroup> {
             }
         }
         groups.push(LoadGroup {
-            curve: g.curve,
+            curve: g.curve.clone(),
             entries,
         });
     }

@@ -1,0 +1,186 @@
+//! Keyframes from the files animation packages export: `(time, value)` pairs for a keyed
+//! curve ([`crate::problem::boundary::Keyframes`]).
+//!
+//! * **CSV** (or any text table): one key per line, time and value separated by a comma,
+//!   semicolon, tab or spaces; blank lines and lines starting with `#` are skipped, and so is
+//!   a first line that is not two numbers (a header such as `time,value` or `frame,jaw`).
+//! * **JSON**: `[[t, v], ...]`, `[{"time": t, "value": v}, ...]` (also `"frame"` for `"time"`)
+//!   or `{"time": [...], "value": [...]}`.
+//!
+//! With `fps`, the first column counts frames of an animation at that rate (Blender's and
+//! Maya's frame numbers), converted to seconds as `frame / fps`. Errors name the file and
+//! the line (CSV) or the key (JSON).
+
+use crate::error::{Error, Location, Result};
+
+/// Parses the text of a keys file (`name` for messages); times in seconds.
+pub fn parse_keys(text: &str, name: &str, fps: Option<f64>) -> Result<Vec<(f64, f64)>> {
+    if let Some(f) = fps {
+        if !(f.is_finite() && f > 0.0) {
+            return Err(Error::input(
+                name,
+                Location::Field("keys_fps".into()),
+                format!("must be a positive frame rate, got {f}"),
+            ));
+        }
+    }
+    let scale = fps.map_or(1.0, |f| 1.0 / f);
+    let first = text.trim_start().chars().next();
+    let keys = if matches!(first, Some('[') | Some('{')) {
+        parse_json(text, name)?
+    } else {
+        parse_table(text, name)?
+    };
+    if keys.is_empty() {
+        return Err(Error::input(name, Location::None, "holds no keys"));
+    }
+    Ok(keys.into_iter().map(|(t, v)| (t * scale, v)).collect())
+}
+
+/// Reads a keys file.
+pub fn read_keys(path: &std::path::Path, fps: Option<f64>) -> Result<Vec<(f64, f64)>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_keys(&text, &path.display().to_string(), fps)
+}
+
+fn parse_table(text: &str, name: &str) -> Result<Vec<(f64, f64)>> {
+    let mut keys = Vec::new();
+    let mut seen_data = false;
+    for (i, line) in text.lines().enumerate() {
+        let l = line.trim();
+        if l.is_empty() || l.starts_with('#') {
+            continue;
+        }
+        let cols: Vec<&str> = l
+            .split(|c: char| c == ',' || c == ';' || c == '\t' || c == ' ')
+            .filter(|s| !s.is_empty())
+            .collect();
+        let nums: Option<Vec<f64>> = cols.iter().map(|c| c.parse::<f64>().ok()).collect();
+        match nums {
+            Some(n) if n.len() == 2 => {
+                if !(n[0].is_finite() && n[1].is_finite()) {
+                    return Err(Error::input(
+                        name,
+                        Location::Line(i + 1),
+                        format!("`{l}`: time and value must be finite"),
+                    ));
+                }
+                keys.push((n[0], n[1]));
+                seen_data = true;
+            }
+            _ if !seen_data && keys.is_empty() => {
+                // a header line
+                seen_data = true;
+            }
+            _ => {
+                return Err(Error::input(
+                    name,
+                    Location::Line(i + 1),
+                    format!("`{l}` is not a time and a value"),
+                ))
+            }
+        }
+    }
+    Ok(keys)
+}
+
+fn parse_json(text: &str, name: &str) -> Result<Vec<(f64, f64)>> {
+    let v: serde_json::Value = serde_json::from_str(text)
+        .map_err(|e| Error::input(name, Location::Line(e.line()), e.to_string()))?;
+    let bad = |k: usize, what: &str| {
+        Error::input(
+            name,
+            Location::Field(format!("key {k}")),
+            what.to_string(),
+        )
+    };
+    let num = |x: &serde_json::Value| x.as_f64().filter(|f| f.is_finite());
+    match &v {
+        serde_json::Value::Array(items) => items
+            .iter()
+            .enumerate()
+            .map(|(k, it)| match it {
+                serde_json::Value::Array(p) if p.len() == 2 => match (num(&p[0]), num(&p[1])) {
+                    (Some(t), Some(v)) => Ok((t, v)),
+                    _ => Err(bad(k, "time and value must be finite numbers")),
+                },
+                serde_json::Value::Object(o) => {
+                    let t = o.get("time").or_else(|| o.get("frame")).and_then(num);
+                    match (t, o.get("value").and_then(num)) {
+                        (Some(t), Some(v)) => Ok((t, v)),
+                        _ => Err(bad(k, "needs finite `time` (or `frame`) and `value`")),
+                    }
+                }
+                _ => Err(bad(k, "is neither [time, value] nor {\"time\", \"value\"}")),
+            })
+            .collect(),
+        serde_json::Value::Object(o) => {
+            let col = |k: &str| o.get(k).and_then(|c| c.as_array());
+            let (Some(ts), Some(vs)) = (col("time").or_else(|| col("frame")), col("value")) else {
+                return Err(Error::input(
+                    name,
+                    Location::None,
+                    "an object of keys needs the arrays `time` (or `frame`) and `value`",
+                ));
+            };
+            if ts.len() != vs.len() {
+                return Err(Error::input(
+                    name,
+                    Location::Field("value".into()),
+                    format!("{} values for {} times", vs.len(), ts.len()),
+                ));
+            }
+            ts.iter()
+                .zip(vs)
+                .enumerate()
+                .map(|(k, (t, v))| match (num(t), num(v)) {
+                    (Some(t), Some(v)) => Ok((t, v)),
+                    _ => Err(bad(k, "time and value must be finite numbers")),
+                })
+                .collect()
+        }
+        _ => Err(Error::input(
+            name,
+            Location::None,
+            "keys must be an array or an object",
+        )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn csv_with_a_header_comments_and_frames() {
+        let text = "# jaw from Blender\nframe,jaw_open\n0, 0.0\n12;0.1\n24\t0.15\n";
+        let k = parse_keys(text, "jaw.csv", Some(24.0)).unwrap();
+        assert_eq!(k, vec![(0.0, 0.0), (0.5, 0.1), (1.0, 0.15)]);
+    }
+
+    #[test]
+    fn the_json_forms_agree() {
+        let want = vec![(0.0, 0.0), (0.5, 0.2)];
+        for text in [
+            "[[0, 0], [0.5, 0.2]]",
+            r#"[{"time": 0, "value": 0}, {"time": 0.5, "value": 0.2}]"#,
+            r#"{"time": [0, 0.5], "value": [0, 0.2]}"#,
+        ] {
+            assert_eq!(parse_keys(text, "k.json", None).unwrap(), want, "{text}");
+        }
+    }
+
+    #[test]
+    fn bad_keys_name_the_file_and_line_or_key() {
+        let e = parse_keys("time,value\n0,0\n0.5,x\n", "jaw.csv", None).unwrap_err().to_string();
+        assert!(e.contains("jaw.csv:3:"), "{e}");
+        let e = parse_keys("[[0, 0], [1]]", "k.json", None).unwrap_err().to_string();
+        assert!(e.contains("k.json") && e.contains("key 1"), "{e}");
+        let e = parse_keys("0,nan\n", "k.csv", None).unwrap_err().to_string();
+        assert!(e.contains("finite"), "{e}");
+        let e = parse_keys("# nothing\n", "k.csv", None).unwrap_err().to_string();
+        assert!(e.contains("no keys"), "{e}");
+        let e = parse_keys("0,1\n", "k.csv", Some(0.0)).unwrap_err().to_string();
+        assert!(e.contains("keys_fps"), "{e}");
+    }
+}
