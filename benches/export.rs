@@ -15,9 +15,9 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 use sticky_lips::driver::{self, RunOptions};
-use sticky_lips::real::Precision;
 use sticky_lips::io::cache::{mdd_bytes, pc2_bytes, usda_text, UsdLayer, UsdMesh};
 use sticky_lips::paper::{scenario_of, spec, Model};
+use sticky_lips::real::Precision;
 use sticky_lips::tled::Simulation;
 
 fn bench(c: &mut Criterion) {
@@ -25,7 +25,10 @@ fn bench(c: &mut Criterion) {
     let dir = std::env::temp_dir().join(format!("sticky-lips-bench-export-{}", std::process::id()));
     let (_, problem) = scenario_of(Model::Face, true, &run, &dir.join("scenario.toml")).unwrap();
     let skin = problem.physics.skin.clone().expect("the face has a skin");
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
     let mut g = c.benchmark_group("export");
     g.sample_size(10);
     {

@@ -565,7 +565,10 @@ fn face_jaw_run(dir: &std::path::Path, jaw: &str) -> Vec<[f64; 3]> {
     )
     .unwrap();
     let mut doc: toml::Table = toml::from_str(&base).unwrap();
-    doc.insert("jaw".into(), toml::Value::Table(toml::from_str(jaw).unwrap()));
+    doc.insert(
+        "jaw".into(),
+        toml::Value::Table(toml::from_str(jaw).unwrap()),
+    );
     let path = dir.join("scenario.toml");
     std::fs::write(&path, toml::to_string(&doc).unwrap()).unwrap();
     let p = sticky_lips::io::scenario::read(&path).unwrap().problem;
@@ -588,9 +591,13 @@ fn keyed_jaw_angle_is_the_ramp_it_samples() {
     let keyed = face_jaw_run(&dir, "keys = [[0.0, 0.0], [0.5, 0.15], [1.0, 0.15]]\n");
     std::fs::write(dir.join("jaw.csv"), "frame,jaw\n0,0\n12,0.15\n24,0.15\n").unwrap();
     let csv = face_jaw_run(&dir, "keys_file = \"jaw.csv\"\nkeys_fps = 24.0\n");
-    std::fs::write(dir.join("jaw.json"), "{\"time\": [0, 0.5], \"value\": [0, 0.15]}").unwrap();
+    std::fs::write(
+        dir.join("jaw.json"),
+        "{\"time\": [0, 0.5], \"value\": [0, 0.15]}",
+    )
+    .unwrap();
     let json = face_jaw_run(&dir, "keys_file = \"jaw.json\"\n");
-    let moved = ramp.iter().map(|u| norm(u)).fold(0.0, f64::max);
+    let moved = ramp.iter().map(norm).fold(0.0, f64::max);
     assert!(moved > 1e-5, "the jaw moved {moved} m");
     assert_eq!(keyed, ramp);
     assert_eq!(csv, ramp);

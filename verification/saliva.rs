@@ -1463,3 +1463,101 @@ fn saliva_layer_without_stickiness_parts_at_once() {
     no_stickiness::<f64>();
     no_stickiness::<f32>();
 }
+
+/// Keyed moisture by zone (`[[wet]]`, `problem::Wetting`): the three zones split the saliva
+/// elements (left: `x >= c + w/6`, right: `x <= c - w/6`, centre between, with `w` the span
+/// of the lip columns), the moisture of a wetted zone is `0M + amount * curve(t)` before
+/// evaporation (eq. 6, clamped at 0) and its breaking point follows eq. (7); the other
+/// elements keep theirs. Checked on the coarse face's plan, and in a run: the elements the
+/// run reports carry the keyed moisture at the step's time.
+#[test]
+fn keyed_wetting_moistens_its_zone_only() {
+    use sticky_lips::tled::precompute::Discretisation;
+    let dir = std::env::temp_dir().join(format!("sticky-lips-wet-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let base = sticky_lips::io::scenario::with_overrides(
+        sticky_lips::paper::TABLE1,
+        sticky_lips::paper::TABLE1_NAME,
+        &[
+            ("mesh.face.resolution", toml::Value::Float(0.25)),
+            ("time.total", toml::Value::Float(0.02)),
+        ],
+    )
+    .unwrap();
+    let with_wet = |wet: &str| {
+        let path = dir.join("wet.toml");
+        std::fs::write(&path, format!("{base}\n{wet}")).unwrap();
+        sticky_lips::io::scenario::read(&path)
+    };
+    let zones = |z: &str| {
+        let p = with_wet(&format!(
+            "[[wet]]\nzone = \"{z}\"\nkeys = [[0.0, 0.0], [0.01, -60.0]]\n"
+        ))
+        .unwrap()
+        .problem;
+        p.physics.wetting[0].elements.clone()
+    };
+    let (l, c, r, all) = (zones("left"), zones("centre"), zones("right"), zones("all"));
+    let mut union: Vec<u32> = l.iter().chain(&c).chain(&r).copied().collect();
+    union.sort_unstable();
+    assert_eq!(
+        union, all,
+        "left, centre and right split the saliva elements"
+    );
+    assert!(!l.is_empty() && !c.is_empty() && !r.is_empty());
+    assert_eq!(l.len(), r.len(), "the face is symmetric");
+    // drying the left third by 60 um over 10 ms (Table 1: 0M = Mc = 100 um, K = 0.1)
+    let p = with_wet("[[wet]]\nzone = \"left\"\nkeys = [[0.0, 0.0], [0.01, -60.0]]\n")
+        .unwrap()
+        .problem;
+    let d = Discretisation::new(&p);
+    let sp = &d.saliva;
+    for (k, e) in sp.elements.iter().enumerate() {
+        let left = l.binary_search(e).is_ok();
+        for (t, dried) in [(0.0, 0.0), (0.005, 30.0), (0.02, 60.0)] {
+            let (m, z) = sp.moisture_and_breaking_point(k, 0.0, t);
+            let want = if left { 100.0 - dried } else { 100.0 };
+            assert!(
+                (m - want).abs() < 1e-12,
+                "element {e} at {t}: {m} not {want}"
+            );
+            let z_want = if want > 100.0 {
+                1.0
+            } else {
+                1.0 + 0.1 * want / 100.0
+            };
+            assert!((z - z_want).abs() < 1e-12, "element {e} at {t}: Z {z}");
+        }
+    }
+    // the run's saliva state carries it
+    let mut sim = sticky_lips::tled::Simulation::<f64>::new(&p).unwrap();
+    for _ in 0..1000 {
+        sim.step().unwrap();
+    }
+    let st = sim.saliva();
+    for (k, e) in sp.elements.iter().enumerate() {
+        let want = if l.binary_search(e).is_ok() {
+            100.0 - 60.0 * 0.999 / 1.0
+        } else {
+            100.0
+        };
+        assert!(
+            (st.moisture[k] - want).abs() < 1e-9,
+            "element {e}: {}",
+            st.moisture[k]
+        );
+    }
+    // bad zones are named
+    let err = |wet: &str| match with_wet(wet) {
+        Ok(_) => panic!("{wet} was accepted"),
+        Err(e) => e.to_string(),
+    };
+    let e = err("[[wet]]\nzone = \"top\"\nkeys = [[0.0, 1.0]]\n");
+    assert!(
+        e.contains("wet[0].zone") && e.contains("unknown zone `top`"),
+        "{e}"
+    );
+    let e = err("[[wet]]\nzone = \"left\"\nshape = \"ramp\"\n");
+    assert!(e.contains("wet[0].amount"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -163,7 +163,10 @@ fn energy_drift(dt_fraction: f64) -> (f64, f64, f64, usize) {
     };
     let probe = cantilever(vec![], 0.0, 1e-3, 1.0);
     let tip = probe.mesh.node_sets["x_max"].clone();
-    let forces = vec![force(&tip, 2, -2e-3, step.clone()), force(&tip, 1, 1e-3, step)];
+    let forces = vec![
+        force(&tip, 2, -2e-3, step.clone()),
+        force(&tip, 1, 1e-3, step),
+    ];
     let p0 = cantilever(forces.clone(), 0.0, 1e-3, 1.0);
     let dtc = critical_dt(&p0);
     let t_end = 2.0; // s: ~15 periods of the first bending mode

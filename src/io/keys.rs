@@ -52,7 +52,7 @@ fn parse_table(text: &str, name: &str) -> Result<Vec<(f64, f64)>> {
             continue;
         }
         let cols: Vec<&str> = l
-            .split(|c: char| c == ',' || c == ';' || c == '\t' || c == ' ')
+            .split([',', ';', '\t', ' '])
             .filter(|s| !s.is_empty())
             .collect();
         let nums: Option<Vec<f64>> = cols.iter().map(|c| c.parse::<f64>().ok()).collect();
@@ -88,11 +88,7 @@ fn parse_json(text: &str, name: &str) -> Result<Vec<(f64, f64)>> {
     let v: serde_json::Value = serde_json::from_str(text)
         .map_err(|e| Error::input(name, Location::Line(e.line()), e.to_string()))?;
     let bad = |k: usize, what: &str| {
-        Error::input(
-            name,
-            Location::Field(format!("key {k}")),
-            what.to_string(),
-        )
+        Error::input(name, Location::Field(format!("key {k}")), what.to_string())
     };
     let num = |x: &serde_json::Value| x.as_f64().filter(|f| f.is_finite());
     match &v {
@@ -172,15 +168,25 @@ mod tests {
 
     #[test]
     fn bad_keys_name_the_file_and_line_or_key() {
-        let e = parse_keys("time,value\n0,0\n0.5,x\n", "jaw.csv", None).unwrap_err().to_string();
+        let e = parse_keys("time,value\n0,0\n0.5,x\n", "jaw.csv", None)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("jaw.csv:3:"), "{e}");
-        let e = parse_keys("[[0, 0], [1]]", "k.json", None).unwrap_err().to_string();
+        let e = parse_keys("[[0, 0], [1]]", "k.json", None)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("k.json") && e.contains("key 1"), "{e}");
-        let e = parse_keys("0,nan\n", "k.csv", None).unwrap_err().to_string();
+        let e = parse_keys("0,nan\n", "k.csv", None)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("finite"), "{e}");
-        let e = parse_keys("# nothing\n", "k.csv", None).unwrap_err().to_string();
+        let e = parse_keys("# nothing\n", "k.csv", None)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("no keys"), "{e}");
-        let e = parse_keys("0,1\n", "k.csv", Some(0.0)).unwrap_err().to_string();
+        let e = parse_keys("0,1\n", "k.csv", Some(0.0))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("keys_fps"), "{e}");
     }
 }

@@ -47,6 +47,9 @@ pub struct ScenarioFile {
     /// Muscles of the mouth model, by name (generators `mouth` and `face`).
     #[serde(default)]
     pub model_muscle: Vec<ModelMuscleDef>,
+    /// Keyed moisture: saliva wetted over time, by zone of the mouth or element set.
+    #[serde(default)]
+    pub wet: Vec<WetDef>,
     pub time: TimeDef,
     #[serde(default)]
     pub numerics: NumericsDef,
@@ -182,6 +185,21 @@ pub struct JawDef {
     /// The opening (rad) the curve's value multiplies; with keys, default 1 (the keys are
     /// then the angle itself).
     pub angle: Option<f64>,
+    #[serde(flatten)]
+    pub curve: CurveDef,
+}
+
+/// `[[wet]]`: moisture added to the saliva of a zone over time (um, the curve's value times
+/// `amount`; with keys, `amount` defaults to 1 and the keys are the moisture added).
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct WetDef {
+    /// `left`, `right` (the subject's: `+x` is left), `centre` (the middle third of the
+    /// mouth's width, left and right the outer thirds) or `all` (mouth models).
+    pub zone: Option<String>,
+    /// Or the saliva elements of an element set.
+    pub elements: Option<String>,
+    pub amount: Option<f64>,
     #[serde(flatten)]
     pub curve: CurveDef,
 }
@@ -525,6 +543,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
     let curve = |c: &CurveDef, field: &str, default: LoadShape| r.curve(c, field, default);
     let mut physics = read_physics(&sf, f, base, scale, &materials, &curve)?;
     r.mouth_model_physics(&sf, anatomy.as_ref(), &mut physics)?;
+    physics.wetting = r.wetting(&sf, anatomy.as_ref(), &element_material, &physics)?;
     // the skin follows the jaw's prescribed rotation beside the model
     physics.skin = skin.map(|mut s| {
         s.jaw = anatomy.as_ref().and_then(|a| {
@@ -869,6 +888,106 @@ impl Reader<'_> {
         })
     }
 
+    /// `[[wet]]`: the saliva elements of each zone or set and their moisture curve.
+    fn wetting(
+        &self,
+        sf: &ScenarioFile,
+        anatomy: Option<&crate::mesh::anatomy::MouthAnatomy>,
+        element_material: &[u32],
+        physics: &Physics,
+    ) -> Result<Vec<crate::problem::Wetting>> {
+        let f = self.f;
+        let saliva_mats: Vec<u32> = physics.saliva.iter().map(|s| s.material).collect();
+        let saliva: Vec<u32> = (0..element_material.len() as u32)
+            .filter(|&e| saliva_mats.contains(&element_material[e as usize]))
+            .collect();
+        let mut out = Vec::new();
+        for (i, w) in sf.wet.iter().enumerate() {
+            let field = format!("wet[{i}]");
+            let elements: Vec<u32> = match (&w.zone, &w.elements) {
+                (Some(_), Some(_)) | (None, None) => {
+                    return Err(Error::field(f, field, "give one of zone and elements"))
+                }
+                (None, Some(set)) => {
+                    let members = self.mesh.element_sets.get(set).ok_or_else(|| {
+                        Error::field(
+                            f,
+                            format!("{field}.elements"),
+                            format!("no element set `{set}`"),
+                        )
+                    })?;
+                    saliva
+                        .iter()
+                        .copied()
+                        .filter(|e| members.binary_search(e).is_ok())
+                        .collect()
+                }
+                (Some(zone), None) => {
+                    let cols = &anatomy
+                        .ok_or_else(|| {
+                            Error::field(
+                                f,
+                                format!("{field}.zone"),
+                                "zones need a mouth model (generator `mouth` or `face`); give elements",
+                            )
+                        })?
+                        .columns;
+                    let (lo, hi) = cols
+                        .x
+                        .iter()
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                            (a.min(x), b.max(x))
+                        });
+                    let third = (hi - lo) / 6.0;
+                    let c = cols.center;
+                    let keep: Box<dyn Fn(f64) -> bool> = match zone.as_str() {
+                        "left" => Box::new(move |x| x >= c + third),
+                        "right" => Box::new(move |x| x <= c - third),
+                        "centre" | "center" => Box::new(move |x| (x - c).abs() < third),
+                        "all" => Box::new(|_| true),
+                        other => {
+                            return Err(Error::field(
+                                f,
+                                format!("{field}.zone"),
+                                format!("unknown zone `{other}` (left, right, centre, all)"),
+                            ))
+                        }
+                    };
+                    saliva
+                        .iter()
+                        .copied()
+                        .filter(|&e| {
+                            let x = self.mesh.element_coords(e as usize);
+                            keep(x.iter().map(|p| p[0]).sum::<f64>() / 8.0)
+                        })
+                        .collect()
+                }
+            };
+            if elements.is_empty() {
+                return Err(Error::field(f, field, "selects no saliva element"));
+            }
+            let keyed = w.curve.keys.is_some() || w.curve.keys_file.is_some();
+            let amount = match (w.amount, keyed) {
+                (Some(a), _) => a,
+                (None, true) => 1.0,
+                (None, false) => {
+                    return Err(Error::field(
+                        f,
+                        format!("{field}.amount"),
+                        "required (um of moisture added), unless keys give it over time",
+                    ))
+                }
+            };
+            let curve = self.curve(&w.curve, &field, LoadShape::SmoothStep)?;
+            out.push(crate::problem::Wetting {
+                elements,
+                amount,
+                curve,
+            });
+        }
+        Ok(out)
+    }
+
     /// A curve given by keyframes (`keys` or `keys_file`).
     fn keyed_curve(&self, c: &CurveDef, field: &str) -> Result<LoadCurve> {
         for (name, set) in [
@@ -911,15 +1030,11 @@ impl Reader<'_> {
             }
             (None, Some(file)) => {
                 let path = self.base.join(file);
-                let k = crate::io::keys::read_keys(&path, c.keys_fps).map_err(|e| {
-                    match e {
-                        Error::Io { .. } => Error::field(
-                            self.f,
-                            format!("{field}.keys_file"),
-                            e.to_string(),
-                        ),
-                        e => e,
+                let k = crate::io::keys::read_keys(&path, c.keys_fps).map_err(|e| match e {
+                    Error::Io { .. } => {
+                        Error::field(self.f, format!("{field}.keys_file"), e.to_string())
                     }
+                    e => e,
                 })?;
                 (k, path.display().to_string(), format!("{field}.keys_file"))
             }

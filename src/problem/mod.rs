@@ -85,6 +85,19 @@ pub struct Physics {
     pub model: Option<String>,
     /// The user's mesh tied to the model, for the point caches (mouth models).
     pub skin: Option<crate::mesh::skin::Skin>,
+    /// Keyed moisture: saliva wetted (or dried, with negative values) over time by zone.
+    pub wetting: Vec<Wetting>,
+}
+
+/// Moisture added to some saliva elements over time (um; `amount` times the curve, added to their
+/// initial moisture before evaporation: an artist wets one side of the mouth at a frame, or
+/// makes it stickier). Elements sorted and unique.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Wetting {
+    pub elements: Vec<u32>,
+    /// Moisture added (um) when the curve is 1: `W(t) = amount * curve(t)`.
+    pub amount: f64,
+    pub curve: boundary::LoadCurve,
 }
 
 #[derive(Clone, Debug)]
@@ -125,9 +138,36 @@ impl Problem {
         self.validate_time_and_numerics(f)?;
         self.validate_boundary_conditions(f)?;
         self.validate_saliva(f)?;
+        self.validate_wetting(f)?;
         self.validate_muscles(f)?;
         if !self.additive_constraints {
             self.validate_one_constraint_per_dof(f)?;
+        }
+        Ok(())
+    }
+
+    /// Wetting acts on saliva elements only, listed sorted and unique.
+    fn validate_wetting(&self, f: &str) -> Result<()> {
+        let saliva: Vec<u32> = self.physics.saliva.iter().map(|s| s.material).collect();
+        for (i, w) in self.physics.wetting.iter().enumerate() {
+            let field = format!("wet[{i}]");
+            if !w.amount.is_finite() {
+                return Err(Error::field(f, format!("{field}.amount"), "must be finite"));
+            }
+            if w.elements.windows(2).any(|p| p[0] >= p[1]) {
+                return Err(Error::field(f, field, "elements must be sorted and unique"));
+            }
+            if let Some(&e) = w.elements.iter().find(|&&e| {
+                self.element_material
+                    .get(e as usize)
+                    .is_none_or(|m| !saliva.contains(m))
+            }) {
+                return Err(Error::field(
+                    f,
+                    field,
+                    format!("element {e} is not a saliva element"),
+                ));
+            }
         }
         Ok(())
     }

@@ -44,14 +44,25 @@ pub struct SalivaPlan {
     /// Eq. (11)'s force decay factor per step of each group (at the problem's `dt`), the
     /// value both backends round to their precision.
     pub decay_factor: Vec<f64>,
+    /// Keyed wetting ([`crate::problem::Wetting`]): the saliva elements (indices `k` into
+    /// the fields above) each adds moisture to, its amount (um) and curve.
+    pub wetting: Vec<(Vec<u32>, f64, LoadCurve)>,
 }
 
 impl SalivaPlan {
-    /// Moisture `tM` (eq. 6) and breaking point `Z` (eq. 7) of saliva element `k`, given
-    /// the amount its group has evaporated; the values both backends step with.
-    pub fn moisture_and_breaking_point(&self, k: usize, evaporated: f64) -> (f64, f64) {
+    /// Moisture `tM` (eq. 6) and breaking point `Z` (eq. 7) of saliva element `k` at time
+    /// `t`, given the amount its group has evaporated; the values both backends step with.
+    /// Wetting adds to the initial moisture before evaporation takes its share:
+    /// `tM = max(0, 0M + W(t) - E(t))`.
+    pub fn moisture_and_breaking_point(&self, k: usize, evaporated: f64, t: f64) -> (f64, f64) {
         let g = &self.groups[self.group[k] as usize];
-        let m = saliva::moisture(self.initial_moisture[k], evaporated);
+        let mut m0 = self.initial_moisture[k];
+        for (ks, amount, curve) in &self.wetting {
+            if ks.binary_search(&(k as u32)).is_ok() {
+                m0 += amount * curve.value(t, true);
+            }
+        }
+        let m = saliva::moisture(m0, evaporated);
         (m, saliva::breaking_point(m, g.critical_moisture, g.k_glue))
     }
 
@@ -216,6 +227,15 @@ fn plan_saliva(p: &Problem) -> SalivaPlan {
         plan.initial_moisture
             .push(params.initial_moisture.value(&c, k));
         plan.group.push(g as u32);
+    }
+    for w in &p.physics.wetting {
+        // Problem::validate checks that the elements are saliva elements
+        let ks: Vec<u32> = w
+            .elements
+            .iter()
+            .filter_map(|e| plan.elements.binary_search(e).ok().map(|k| k as u32))
+            .collect();
+        plan.wetting.push((ks, w.amount, w.curve.clone()));
     }
     plan
 }

@@ -80,7 +80,7 @@ pub fn saliva_forces<T: Real>(
             }
         }
         let q = stretch_across(&h, &state.across[k]);
-        let (m, z) = plan.moisture_and_breaking_point(k, state.evaporated[g]);
+        let (m, z) = plan.moisture_and_breaking_point(k, state.evaporated[g], t);
         let broken = apply_breaking_rule(
             q,
             T::from_f64(z),

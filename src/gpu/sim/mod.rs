@@ -255,9 +255,10 @@ impl<T: GpuReal> GpuSimulation<T> {
     /// per saliva group.
     fn fill_saliva_row(&self, s: usize, row: &mut [T], evaporated: &mut [f64]) {
         let sp = &self.disc.saliva;
-        sp.evaporated_into(s as f64 * self.dt, evaporated);
+        let t = s as f64 * self.dt;
+        sp.evaporated_into(t, evaporated);
         for (k, z) in row.iter_mut().enumerate().take(sp.elements.len()) {
-            let (_, zk) = sp.moisture_and_breaking_point(k, evaporated[sp.group[k] as usize]);
+            let (_, zk) = sp.moisture_and_breaking_point(k, evaporated[sp.group[k] as usize], t);
             *z = T::from_f64(zk);
         }
     }
@@ -503,10 +504,12 @@ impl<T: GpuReal> GpuSimulation<T> {
             }
             if s > 0 {
                 // moisture and Z of the last step executed, as saliva_forces records them
-                sp.evaporated_into((s - 1) as f64 * self.dt, &mut st.evaporated);
+                let t = (s - 1) as f64 * self.dt;
+                sp.evaporated_into(t, &mut st.evaporated);
                 for k in 0..ns {
                     let g = sp.group[k] as usize;
-                    (st.moisture[k], st.z[k]) = sp.moisture_and_breaking_point(k, st.evaporated[g]);
+                    (st.moisture[k], st.z[k]) =
+                        sp.moisture_and_breaking_point(k, st.evaporated[g], t);
                 }
             }
         }
