@@ -767,3 +767,109 @@ fn catalogue_of_malformed_inputs() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `sticky-lips sweep`: a grid of two values and a named shot become three run directories,
+/// each with its scenario, one line each in `jobs.txt`, and runs whose results differ as
+/// their overrides say; `--plan` writes the plan only; a run whose overrides make a bad
+/// scenario is refused before anything is written, naming the run and the field.
+#[test]
+fn a_sweep_expands_into_runs_and_a_job_list() {
+    use std::process::Command;
+    let bin = env!("CARGO_BIN_EXE_sticky-lips");
+    let dir = std::env::temp_dir().join(format!("sticky-lips-sweep-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let base = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cantilever.toml");
+    let spec = dir.join("spec.toml");
+    std::fs::write(
+        &spec,
+        format!(
+            "base = {:?}\nout = \"runs\"\njobs = 2\n\n[grid]\n\"materials.0.mu\" = [800.0, 3200.0]\n\"time.total\" = [0.02]\n\n[[shot]]\nname = \"soft\"\nset = {{ \"materials.0.mu\" = 400.0, \"time.total\" = 0.02 }}\n",
+            base.display().to_string()
+        ),
+    )
+    .unwrap();
+    let o = Command::new(bin)
+        .args(["sweep", spec.to_str().unwrap(), "--plan"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let runs = dir.join("runs");
+    let names = [
+        "000_mu-800.0_total-0.02",
+        "001_mu-3200.0_total-0.02",
+        "soft",
+    ];
+    for n in names {
+        assert!(runs.join(n).join("scenario.toml").exists(), "{n}");
+        assert!(
+            !runs.join(n).join("summary.json").exists(),
+            "--plan ran {n}"
+        );
+    }
+    let jobs = std::fs::read_to_string(runs.join("jobs.txt")).unwrap();
+    assert_eq!(jobs.lines().count(), 3);
+    assert!(jobs
+        .lines()
+        .all(|l| l.contains(" run ") && l.contains("--threads 1")));
+    let o = Command::new(bin)
+        .args(["sweep", spec.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(runs.join("sweep.json")).unwrap()).unwrap();
+    let statuses: Vec<i64> = summary["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["status"].as_i64().unwrap())
+        .collect();
+    assert_eq!(statuses, vec![0, 0, 0]);
+    let final_of = |n: &str| std::fs::read(runs.join(n).join("final.vtu")).unwrap();
+    assert_ne!(final_of(names[0]), final_of(names[1]));
+    assert_ne!(final_of(names[0]), final_of(names[2]));
+    // each run is an ordinary run: its job line, run again elsewhere, gives the same frames
+    let again = dir.join("again");
+    let o = Command::new(bin)
+        .args([
+            "run",
+            runs.join(names[1]).join("scenario.toml").to_str().unwrap(),
+        ])
+        .args([
+            "--out",
+            again.to_str().unwrap(),
+            "--threads",
+            "2",
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    assert_eq!(
+        std::fs::read(again.join("final.vtu")).unwrap(),
+        final_of(names[1])
+    );
+    // a bad value: refused before any directory is made
+    let bad = dir.join("bad.toml");
+    std::fs::write(
+        &bad,
+        format!(
+            "base = {:?}\nout = \"bad_runs\"\n[grid]\n\"materials.0.mu\" = [800.0, -1.0]\n",
+            base.display().to_string()
+        ),
+    )
+    .unwrap();
+    let o = Command::new(bin)
+        .args(["sweep", bad.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("run 001_mu--1.0") && err.contains("mu"),
+        "{err}"
+    );
+    assert!(!dir.join("bad_runs").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}

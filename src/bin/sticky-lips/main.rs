@@ -4,6 +4,7 @@
 
 mod paper;
 mod preview;
+mod sweep;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::IsTerminal;
@@ -262,6 +263,14 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Many shots: expand SPEC.toml (a base scenario, a [grid] of overrides and/or [[shot]]s)
+    /// into run directories and a job list (OUT/jobs.txt), and run them here in parallel.
+    Sweep {
+        spec: PathBuf,
+        /// Write the run directories and the job list only (for GNU parallel, Slurm, ...).
+        #[arg(long)]
+        plan: bool,
+    },
     /// Write a finished or interrupted run's animation files again: skin.obj, skin.pc2,
     /// skin.mdd, skin.usda (the user's mesh moved by the model) and the preview, from the
     /// frames in RUN_DIR (mouth and face models).
@@ -480,6 +489,10 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             )?;
         }
         Command::Blend { input, shapes, out } => blend(&input, &shapes, &out)?,
+        Command::Sweep { spec, plan } => sweep::sweep(&sweep::Options {
+            spec: &spec,
+            plan_only: plan,
+        })?,
         Command::Export { run_dir, scenario } => {
             let input = InputArgs {
                 input: match scenario {
