@@ -1506,6 +1506,13 @@ fn keyed_wetting_moistens_its_zone_only() {
     );
     assert!(!l.is_empty() && !c.is_empty() && !r.is_empty());
     assert_eq!(l.len(), r.len(), "the face is symmetric");
+    println!(
+        "saliva elements: left {}, centre {}, right {} of {}",
+        l.len(),
+        c.len(),
+        r.len(),
+        all.len()
+    );
     // drying the left third by 60 um over 10 ms (Table 1: 0M = Mc = 100 um, K = 0.1)
     let p = with_wet("[[wet]]\nzone = \"left\"\nkeys = [[0.0, 0.0], [0.01, -60.0]]\n")
         .unwrap()
