@@ -8,7 +8,9 @@ variant below; `args` is the command line `sticky-lips face` needs for it (units
 Every variant keeps only the vertices the head's faces use (the hm08 OBJ lists the body's).
 
   mm_zup   the head in millimetres with Blender's axes: z up, -y forward (x unchanged), the
-           rig's hinge and blend shapes moved with it; vertex order and faces unchanged.
+           rig's hinge and blend shapes moved with it; vertex order and faces unchanged;
+  cm_xfwd  in centimetres, z up, +x forward (a rotation of the axes), its unit not given:
+           `face` detects it from the head's size.
 """
 
 import json
@@ -72,9 +74,23 @@ def rot_zup(v):
     return [x, -z, y]
 
 
+def cm_xfwd(p):
+    # dm -> cm; model (x left, y up, z forward) -> (z, x, y): forward +x, up +z, left +y
+    x, y, z = p
+    return [10.0 * z, 10.0 * x, 10.0 * y]
+
+
+def rot_xfwd(v):
+    x, y, z = v
+    return [z, x, y]
+
+
 VARIANTS = {
     "mm_zup": (mm_zup, lambda v: [100.0 * c for c in rot_zup(v)], rot_zup,
                ["--units", "mm", "--up", "0,0,1", "--forward", "0,-1,0"]),
+    # no --units: `face` finds centimetres from the head's size
+    "cm_xfwd": (cm_xfwd, lambda v: [10.0 * c for c in rot_xfwd(v)], rot_xfwd,
+                ["--up", "0,0,1", "--forward", "1,0,0"]),
 }
 
 

@@ -188,8 +188,9 @@ enum Command {
         /// targets), in the head's units and axes.
         #[arg(long)]
         rig: Option<PathBuf>,
-        /// Length unit of the head and the rig: m, dm, cm, mm or in.
-        #[arg(long, default_value = "m")]
+        /// Length unit of the head and the rig: m, dm, cm, mm or in; `auto`: the one in which
+        /// the head's largest extent is a head's (0.12 to 0.45 m), refused when several are.
+        #[arg(long, default_value = "auto")]
         units: String,
         /// The face's up axis in the input, X,Y,Z.
         #[arg(long, default_value = "0,1,0")]
@@ -976,24 +977,70 @@ fn unit_scale(name: &str) -> Option<f64> {
     }
 }
 
+/// The unit in which a head's largest extent (of the vertices its quads use) is that of a
+/// human head, 0.12 to 0.45 m; an error naming the candidates when none or several are.
+fn detect_units(
+    head: &sticky_lips::mesh::surface::QuadSurface,
+    file: &str,
+) -> sticky_lips::Result<(&'static str, f64)> {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for q in &head.quads {
+        for &v in q {
+            let p = head.vertices[v as usize];
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+    }
+    let extent = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
+    let fits: Vec<(&'static str, f64)> = ["m", "dm", "cm", "mm", "in"]
+        .iter()
+        .map(|&u| (u, unit_scale(u).expect("a known unit")))
+        .filter(|&(_, s)| (0.12..=0.45).contains(&(extent * s)))
+        .collect();
+    match fits.as_slice() {
+        [one] => Ok(*one),
+        _ => Err(sticky_lips::Error::input(
+            file,
+            sticky_lips::error::Location::Field("--units".into()),
+            format!(
+                "the head's largest extent is {extent} units, a head's (0.12 to 0.45 m) in {}: give --units",
+                if fits.is_empty() {
+                    "none of m, dm, cm, mm, in".to_string()
+                } else {
+                    fits.iter().map(|f| f.0).collect::<Vec<_>>().join(" and ")
+                }
+            ),
+        )),
+    }
+}
+
 fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
     use sticky_lips::error::{Error, Location};
     use sticky_lips::mesh::face;
     let t0 = std::time::Instant::now();
     let file = a.input.display().to_string();
-    let scale = unit_scale(a.units).ok_or_else(|| {
-        Error::input(
-            "command line",
-            Location::Field("--units".into()),
-            format!("unknown unit `{}` (m, dm, cm, mm or in)", a.units),
-        )
-    })?;
+    let head = sticky_lips::io::obj::read_obj(a.input)?;
+    let scale = if a.units == "auto" {
+        let (unit, scale) = detect_units(&head, &file)?;
+        println!("face: units {unit}, from the head's size (give --units to choose)");
+        scale
+    } else {
+        unit_scale(a.units).ok_or_else(|| {
+            Error::input(
+                "command line",
+                Location::Field("--units".into()),
+                format!("unknown unit `{}` (m, dm, cm, mm, in or auto)", a.units),
+            )
+        })?
+    };
     let frame = face::InputFrame {
         scale,
         up: sticky_lips::io::args::vec3(a.up, "--up")?,
         forward: sticky_lips::io::args::vec3(a.forward, "--forward")?,
     };
-    let head = sticky_lips::io::obj::read_obj(a.input)?;
     let rig: face::FaceRig = match a.rig {
         Some(p) => {
             let text = std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?;

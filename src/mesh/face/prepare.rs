@@ -563,6 +563,8 @@ pub fn prepare(
         *v = frame.point(*v);
     }
     s.validate(file)?;
+    check_one_piece(&s, file)?;
+    check_orientation(&s, file)?;
     let head_model = s.clone();
     let adj = Adjacency::new(&s);
     let contour = find_contour(&s, &adj, params, file)?;
@@ -785,6 +787,73 @@ pub fn prepare(
     })
 }
 
+/// A head is one piece: every quad reaches every other through shared vertices (separate
+/// eyes, teeth or a second head would be taken for skin).
+fn check_one_piece(s: &QuadSurface, file: &str) -> Result<()> {
+    let nv = s.vertices.len();
+    let mut parent: Vec<u32> = (0..nv as u32).collect();
+    fn find(p: &mut [u32], mut x: u32) -> u32 {
+        while p[x as usize] != x {
+            p[x as usize] = p[p[x as usize] as usize];
+            x = p[x as usize];
+        }
+        x
+    }
+    for q in &s.quads {
+        for &v in &q[1..] {
+            let (a, b) = (find(&mut parent, q[0]), find(&mut parent, v));
+            if a != b {
+                parent[a.max(b) as usize] = a.min(b);
+            }
+        }
+    }
+    let mut sizes: BTreeMap<u32, usize> = BTreeMap::new();
+    for q in &s.quads {
+        *sizes.entry(find(&mut parent, q[0])).or_default() += 1;
+    }
+    if sizes.len() > 1 {
+        let mut counts: Vec<usize> = sizes.values().copied().collect();
+        counts.sort_unstable_by(|a, b| b.cmp(a));
+        counts.truncate(5);
+        return Err(Error::input(
+            file,
+            Location::None,
+            format!(
+                "the mesh has {} separate pieces (the largest of {:?} quads): give the head's skin alone",
+                sizes.len(),
+                counts
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The quads' normals agree: two quads that share an edge run along it in opposite
+/// directions (else one of them faces inward).
+fn check_orientation(s: &QuadSurface, file: &str) -> Result<()> {
+    let mut seen: BTreeMap<(u32, u32), usize> = BTreeMap::new();
+    for (qi, q) in s.quads.iter().enumerate() {
+        for i in 0..4 {
+            let (a, b) = (q[i], q[(i + 1) % 4]);
+            if let Some(&other) = seen.get(&(a, b)) {
+                return Err(Error::input(
+                    file,
+                    s.quad_location(qi),
+                    format!(
+                        "the quad at {} runs along the edge from vertex {} to {} in the same direction as the quad at {}: their normals disagree (make the normals consistent)",
+                        s.quad_name(qi),
+                        a + 1,
+                        b + 1,
+                        s.quad_name(other)
+                    ),
+                ));
+            }
+            seen.insert((a, b), qi);
+        }
+    }
+    Ok(())
+}
+
 /// The skin's `z` above `(x, y)`: of the quads whose projection on the `x, y` plane holds
 /// the point (split into two triangles each), the front-most; else the `z` of the nearest
 /// vertex in `x, y`.
@@ -951,6 +1020,52 @@ mod tests {
 
     fn q_index(s: &QuadSurface, q: &[u32; 4]) -> usize {
         s.quads.iter().position(|x| x == q).unwrap()
+    }
+
+    #[test]
+    fn a_head_in_pieces_or_with_a_flipped_quad_is_refused() {
+        let frame = frame_mm();
+        let head = synthetic_head();
+        // a loose quad far away: a second piece
+        let mut two = head.clone();
+        let n = two.vertices.len() as u32;
+        for d in [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]] {
+            two.vertices.push([500.0 + d[0], 500.0 + d[1], 0.0]);
+        }
+        two.quads.push([n, n + 1, n + 2, n + 3]);
+        two.group_of_quad.push(0);
+        if let Some(uv) = two.uv.as_mut() {
+            uv.extend([[0.0, 0.0]; 4]);
+        }
+        let e = prepare(
+            &two,
+            &FaceRig::default(),
+            frame,
+            &PrepareParams::default(),
+            "two.obj",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("two.obj") && e.contains("2 separate pieces"),
+            "{e}"
+        );
+        // one quad turned inside out
+        let mut flipped = head.clone();
+        flipped.quads[10].reverse();
+        let e = prepare(
+            &flipped,
+            &FaceRig::default(),
+            frame,
+            &PrepareParams::default(),
+            "flip.obj",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("flip.obj") && e.contains("normals disagree"),
+            "{e}"
+        );
     }
 
     #[test]
