@@ -12,7 +12,7 @@
 # 7. the animation files (PC2, MDD, USD) of the default job, of a user's head made runnable
 #    by `sticky-lips face`, and of the procedural mouth, read back by usd-core and by Blender
 #    (PyPI bpy, headless) in .venv-anim (scripts/check_animation.py);
-# 8. every fuzz target for FUZZ_SECONDS (default 20) seconds (scripts/fuzz.sh: installs
+# 8. every fuzz target for FUZZ_SECONDS (default 10) seconds (scripts/fuzz.sh: installs
 #    cargo-fuzz, builds with RUSTC_BOOTSTRAP=1).
 # Mutation testing is its own command (scripts/mutants.sh; see verification/README.md).
 # With CI=true it first installs lavapipe (Mesa's software Vulkan driver) so that the GPU
@@ -67,7 +67,8 @@ cargo fmt --all -- --check
 
 step "cargo clippy -- -D warnings (with and without the gpu feature, and the library alone)"
 cargo clippy --all-targets -- -D warnings
-cargo clippy --all-targets --no-default-features --features equilibrium -- -D warnings
+# without the GPU: the library and the command line (their tests are linted above)
+cargo clippy --lib --bins --no-default-features --features equilibrium -- -D warnings
 # the build the fuzz targets use (no GPU, no static solver)
 cargo clippy --lib --no-default-features -- -D warnings
 
@@ -173,7 +174,7 @@ fi
 ANIM="$ANIM:$OUT/paper-procedural/runs/fig4_sticky"
 STICKY_LIPS_ANIM_OUT="$ANIM" .venv-anim/bin/python -m pytest -q -rs scripts/check_animation.py
 
-step "fuzz targets: every parser, ${FUZZ_SECONDS:-20} s each from the committed corpus (scripts/fuzz.sh)"
-FUZZ_SECONDS=${FUZZ_SECONDS:-20} bash scripts/fuzz.sh
+step "fuzz targets: every parser, ${FUZZ_SECONDS:-10} s each from the committed corpus (scripts/fuzz.sh)"
+FUZZ_SECONDS=${FUZZ_SECONDS:-10} bash scripts/fuzz.sh
 
 printf '\nall checks passed (%d s)\n' "$(($(date +%s) - T0))"
