@@ -605,5 +605,22 @@ fn keyed_jaw_angle_is_the_ramp_it_samples() {
     // another curve gives another run (the comparison can fail)
     let other = face_jaw_run(&dir, "keys = [[0.0, 0.0], [0.4, 0.15]]\n");
     assert_ne!(other, ramp);
+    // a muscle's activation keyed the same way (activation 1: the keys are the activation)
+    let base = std::fs::read_to_string(dir.join("scenario.toml")).unwrap();
+    let path = dir.join("muscle.toml");
+    std::fs::write(
+        &path,
+        format!("{base}\n[[model_muscle]]\nname = \"depressor_labii_inferioris_l\"\nstrength = 0.05\nkeys = [[0.0, 0.0], [0.01, 1.0], [0.02, 0.25]]\n"),
+    )
+    .unwrap();
+    let p = sticky_lips::io::scenario::read(&path).unwrap().problem;
+    let m = &p.physics.muscles[0];
+    assert_eq!(m.activation, 1.0);
+    for (t, a) in [(0.005, 0.5), (0.015, 0.625), (0.5, 0.25)] {
+        assert!(
+            (m.curve.value(t, true) - a).abs() < 1e-12,
+            "activation at {t}"
+        );
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
