@@ -10,7 +10,8 @@ Every variant keeps only the vertices the head's faces use (the hm08 OBJ lists t
   mm_zup   the head in millimetres with Blender's axes: z up, -y forward (x unchanged), the
            rig's hinge and blend shapes moved with it; vertex order and faces unchanged;
   cm_xfwd  in centimetres, z up, +x forward (a rotation of the axes), its unit not given:
-           `face` detects it from the head's size.
+           `face` detects it from the head's size;
+  mm_zup_norig  mm_zup without its rig (no rig.json): `face` estimates the jaw.
 """
 
 import json
@@ -91,6 +92,9 @@ VARIANTS = {
     # no --units: `face` finds centimetres from the head's size
     "cm_xfwd": (cm_xfwd, lambda v: [10.0 * c for c in rot_xfwd(v)], rot_xfwd,
                 ["--up", "0,0,1", "--forward", "1,0,0"]),
+    # no rig: `face` estimates the jaw's weights and hinge (written without rig.json)
+    "mm_zup_norig": (mm_zup, lambda v: [100.0 * c for c in rot_zup(v)], rot_zup,
+                     ["--units", "mm", "--up", "0,0,1", "--forward", "0,-1,0"]),
 }
 
 
@@ -108,8 +112,9 @@ def main(head_dir, out_dir):
         if r.get("hinge_axis") is not None:
             r["hinge_axis"] = axis(r["hinge_axis"])
         r["targets"] = {k: [offset(v) for v in t] for k, t in rig.get("targets", {}).items()}
-        with open(os.path.join(d, "rig.json"), "w") as f:
-            json.dump(r, f)
+        if not name.endswith("_norig"):
+            with open(os.path.join(d, "rig.json"), "w") as f:
+                json.dump(r, f)
         with open(os.path.join(d, "args"), "w") as f:
             f.write(" ".join(args) + "\n")
         print(f"{d}: {' '.join(args)}")

@@ -163,7 +163,9 @@ if [ -s "$OUT/makehuman-head/head.obj" ]; then
   for m in "$OUT"/face_meshes/*/; do
     m=${m%/}
     # shellcheck disable=SC2046
-    "$BIN" face "$m/head.obj" --rig "$m/rig.json" $(cat "$m/args") --resolution 0.25 --out "$m/face"
+    rig=()
+    if [ -f "$m/rig.json" ]; then rig=(--rig "$m/rig.json"); fi
+    "$BIN" face "$m/head.obj" "${rig[@]}" $(cat "$m/args") --resolution 0.25 --out "$m/face"
     "$BIN" run "$m/face/scenario.toml" --quiet
     cp "$m/head.obj" "$m/face/run/input.obj"
     ANIM="$ANIM:$m/face/run"
