@@ -337,6 +337,13 @@ fn out_dir(explicit: Option<PathBuf>, default: Option<PathBuf>, input: &Path) ->
 const EXIT_INTERRUPTED: u8 = 130;
 
 fn main() -> ExitCode {
+    // Rust ignores SIGPIPE, so writing to a closed pipe (`sticky-lips ... | head`) would
+    // panic in println!; a command-line tool ends quietly there, as the default action does.
+    #[cfg(unix)]
+    // SAFETY: setting a signal's disposition to its default before any thread is started.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     // SIGINT/SIGTERM: runs stop between steps, finish the frames handed to the writer and
     // write summary.json marked interrupted; a second signal ends the process at once.
