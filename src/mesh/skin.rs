@@ -153,6 +153,7 @@ impl Skin {
             .map(|&g| Some(g as usize) == saliva)
             .collect();
         let is_front = |v: usize| front.is_none_or(|f| f[v]);
+        let grid = QuadGrid::new(&quads, params.band);
         let mut weights: Vec<SkinWeight> = mesh
             .vertices
             .iter()
@@ -160,7 +161,7 @@ impl Skin {
             .enumerate()
             .map(|(v, (p, &jaw))| {
                 if is_front(v) {
-                    tie_vertex(p, &quads, &model.quads, &is_saliva, params, jaw)
+                    tie_vertex(p, &quads, &grid, &model.quads, &is_saliva, params, jaw)
                 } else {
                     SkinWeight {
                         nodes: [0; 4],
@@ -347,9 +348,75 @@ fn smoothstep(x: f64) -> f64 {
     x * x * (3.0 - 2.0 * x)
 }
 
+/// The model's quads bucketed by their `x, y` box grown by `reach`, on a uniform grid: a
+/// vertex's cell lists, in increasing order, every quad within `reach` of it in `x, y`, so
+/// that tying a vertex visits those only and finds what a scan of all quads would.
+struct QuadGrid {
+    lo: [f64; 2],
+    cell: f64,
+    nx: usize,
+    ny: usize,
+    cells: Vec<Vec<u32>>,
+}
+
+impl QuadGrid {
+    fn new(quads: &[[[f64; 3]; 4]], reach: f64) -> QuadGrid {
+        let mut lo = [f64::INFINITY; 2];
+        let mut hi = [f64::NEG_INFINITY; 2];
+        for q in quads {
+            let (a, b) = bbox(q);
+            for k in 0..2 {
+                lo[k] = lo[k].min(a[k] - reach);
+                hi[k] = hi[k].max(b[k] + reach);
+            }
+        }
+        let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-9);
+        let side = (quads.len() as f64).sqrt().clamp(1.0, 1024.0);
+        let cell = extent / side;
+        let n = |k: usize| (((hi[k] - lo[k]) / cell).ceil() as usize).clamp(1, 1024);
+        let (nx, ny) = (n(0), n(1));
+        let mut g = QuadGrid {
+            lo,
+            cell,
+            nx,
+            ny,
+            cells: vec![Vec::new(); nx * ny],
+        };
+        for (k, q) in quads.iter().enumerate() {
+            let (a, b) = bbox(q);
+            let (i0, j0) = g.index(a[0] - reach, a[1] - reach);
+            let (i1, j1) = g.index(b[0] + reach, b[1] + reach);
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    g.cells[j * nx + i].push(k as u32);
+                }
+            }
+        }
+        g
+    }
+
+    fn index(&self, x: f64, y: f64) -> (usize, usize) {
+        let c = |v: f64, lo: f64, n: usize| {
+            (((v - lo) / self.cell).floor().max(0.0) as usize).min(n - 1)
+        };
+        (c(x, self.lo[0], self.nx), c(y, self.lo[1], self.ny))
+    }
+
+    /// The quads within reach of `(x, y)` (none outside the grid).
+    fn near(&self, x: f64, y: f64) -> &[u32] {
+        let inside = |v: f64, lo: f64, n: usize| v >= lo && v <= lo + self.cell * n as f64;
+        if !(inside(x, self.lo[0], self.nx) && inside(y, self.lo[1], self.ny)) {
+            return &[];
+        }
+        let (i, j) = self.index(x, y);
+        &self.cells[j * self.nx + i]
+    }
+}
+
 fn tie_vertex(
     p: &[f64; 3],
     quads: &[[[f64; 3]; 4]],
+    grid: &QuadGrid,
     index: &[[u32; 4]],
     is_saliva: &[bool],
     params: &SkinParams,
@@ -364,7 +431,9 @@ fn tie_vertex(
     // the nearest quad in x, y among those the vertex lies at the right depth of
     let reach = params.band;
     let mut best: Option<(f64, usize, f64, f64)> = None;
-    for (k, q) in quads.iter().enumerate() {
+    for &k in grid.near(p[0], p[1]) {
+        let k = k as usize;
+        let q = &quads[k];
         let (lo, hi) = bbox(q);
         let gap = (lo[0] - p[0])
             .max(p[0] - hi[0])
