@@ -1029,6 +1029,16 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
     use sticky_lips::mesh::face;
     let t0 = std::time::Instant::now();
     let file = a.input.display().to_string();
+    // the command line's values first, then the files
+    let up = sticky_lips::io::args::vec3(a.up, "--up")?;
+    let forward = sticky_lips::io::args::vec3(a.forward, "--forward")?;
+    if a.units != "auto" && unit_scale(a.units).is_none() {
+        return Err(Error::input(
+            "command line",
+            Location::Field("--units".into()),
+            format!("unknown unit `{}` (m, dm, cm, mm, in or auto)", a.units),
+        ));
+    }
     let head = sticky_lips::io::obj::read_obj(a.input)?;
     let scale = if a.units == "auto" {
         let (unit, scale) = detect_units(&head, &file)?;
@@ -1043,11 +1053,7 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
             )
         })?
     };
-    let frame = face::InputFrame {
-        scale,
-        up: sticky_lips::io::args::vec3(a.up, "--up")?,
-        forward: sticky_lips::io::args::vec3(a.forward, "--forward")?,
-    };
+    let frame = face::InputFrame { scale, up, forward };
     let rig: face::FaceRig = match a.rig {
         Some(p) => {
             let text = std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?;
