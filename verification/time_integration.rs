@@ -451,3 +451,73 @@ fn damped_run_reaches_static_equilibrium() {
         "damped TLED run differs from the static equilibrium by {err:e} (relative)"
     );
 }
+
+/// The stiffness the stability analysis uses is the element forces' derivative at rest:
+/// `K v = (f(eps v) - f(-eps v)) / (2 eps)` (central difference of the internal forces that
+/// the time step computes, eq. 4 with hourglass control) for random `v` on a distorted block,
+/// both gradient variants, on an unconstrained model. cargo-mutants found the stability
+/// analysis's Lamé constant (`K - 2 mu / 3`) and its hourglass term unchecked: the tests of
+/// the critical time step tolerate what either changes. The element's own estimate `L / c`
+/// is checked against its definition on the same block.
+#[test]
+fn linear_stiffness_is_the_derivative_of_the_element_forces() {
+    use sticky_lips::element::hex8;
+    use sticky_lips::mesh::generate::SplitMix64;
+    use sticky_lips::tled::element_forces::{element_forces, ElementArrays};
+    use sticky_lips::tled::node_update::gather_all;
+    for variant in [GradientVariant::MeanGradient, GradientVariant::Centroid] {
+        let mesh = distorted_block([0.0; 3], [0.03, 0.02, 0.025], [3, 2, 3], 0.2, 17);
+        let p = problem(
+            mesh,
+            variant,
+            BoundaryConditions::default(),
+            TimeSettings {
+                dt: 1e-5,
+                total_time: 1e-3,
+                output_every: 100,
+            },
+            0.0,
+        );
+        let d = Discretisation::new(&p);
+        let el = ElementArrays::<f64>::from_discretisation(&d);
+        let n = d.num_nodes;
+        let mut rng = SplitMix64(5);
+        let v: Vec<f64> = (0..3 * n).map(|_| rng.symmetric()).collect();
+        let mut kv = vec![0.0; 3 * n];
+        linear_stiffness_times(&d, &v, &mut kv);
+        let eps = 1e-7;
+        let force = |s: f64| {
+            let u: Vec<[f64; 3]> = (0..n)
+                .map(|k| [s * v[3 * k], s * v[3 * k + 1], s * v[3 * k + 2]])
+                .collect();
+            let mut blocks = vec![[[0.0; 3]; 8]; d.num_elements()];
+            assert!(element_forces(&el, &u, &mut blocks).is_none());
+            gather_all(&d.gather, &blocks, n)
+        };
+        let (fp, fm) = (force(eps), force(-eps));
+        let scale = kv.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let mut worst = 0.0f64;
+        for k in 0..n {
+            for i in 0..3 {
+                let fd = (fp[k][i] - fm[k][i]) / (2.0 * eps);
+                worst = worst.max((fd - kv[3 * k + i]).abs() / scale);
+            }
+        }
+        println!("{variant:?}: max |K v - central difference| / max |K v| = {worst:.2e}");
+        assert!(scale > 0.0);
+        assert!(worst < 1e-6, "{variant:?}: {worst:e}");
+        // L / c per element, c the P-wave speed of the material
+        let est = sticky_lips::tled::stability::element_estimates(&p);
+        let m = &p.materials[0];
+        let c = (m.law.p_wave_modulus() / m.density).sqrt();
+        assert_eq!(est.len(), p.mesh.elements.len());
+        for (e, t) in est.iter().enumerate() {
+            let want = hex8::characteristic_length(&p.mesh.element_coords(e)) / c;
+            assert_eq!(*t, want);
+        }
+        assert!(
+            c > 3.0 && c < 4.0,
+            "c = {c} m/s for mu = 1000 Pa, K = 10000 Pa"
+        );
+    }
+}
