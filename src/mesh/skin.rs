@@ -343,7 +343,8 @@ fn bilinear_weights(s: f64, t: f64) -> [f64; 4] {
     [(1.0 - s) * (1.0 - t), s * (1.0 - t), s * t, (1.0 - s) * t]
 }
 
-fn smoothstep(x: f64) -> f64 {
+/// `3 x^2 - 2 x^3` of `x` clamped to `[0, 1]`.
+pub(crate) fn smoothstep(x: f64) -> f64 {
     let x = x.clamp(0.0, 1.0);
     x * x * (3.0 - 2.0 * x)
 }
@@ -496,16 +497,10 @@ fn snap_across(q: &[[f64; 3]; 4], s: f64, t: f64) -> (f64, f64) {
     }
 }
 
+/// The quad's box in `x, y`.
 fn bbox(q: &[[f64; 3]; 4]) -> ([f64; 2], [f64; 2]) {
-    let mut lo = [f64::INFINITY; 2];
-    let mut hi = [f64::NEG_INFINITY; 2];
-    for v in q {
-        for k in 0..2 {
-            lo[k] = lo[k].min(v[k]);
-            hi[k] = hi[k].max(v[k]);
-        }
-    }
-    (lo, hi)
+    let (lo, hi) = crate::linalg::bounding_box(q);
+    ([lo[0], lo[1]], [hi[0], hi[1]])
 }
 
 #[cfg(test)]

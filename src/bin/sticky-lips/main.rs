@@ -990,17 +990,12 @@ fn detect_units(
     head: &sticky_lips::mesh::surface::QuadSurface,
     file: &str,
 ) -> sticky_lips::Result<(&'static str, f64)> {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for q in &head.quads {
-        for &v in q {
-            let p = head.vertices[v as usize];
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-    }
+    let (lo, hi) = sticky_lips::linalg::bounding_box(
+        head.quads
+            .iter()
+            .flatten()
+            .map(|&v| &head.vertices[v as usize]),
+    );
     let extent = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
     let fits: Vec<(&'static str, f64)> = ["m", "dm", "cm", "mm", "in"]
         .iter()

@@ -881,10 +881,7 @@ const JAW_TO: f64 = 0.7;
 /// the mouth centre, times a smooth step over half a mouth width forward of the hinge (the
 /// neck and the back of the head stay).
 pub fn estimated_jaw_weight(p: &[f64; 3], centre: [f64; 3], width: f64, hinge: [f64; 3]) -> f64 {
-    let smooth = |x: f64| {
-        let x = x.clamp(0.0, 1.0);
-        x * x * (3.0 - 2.0 * x)
-    };
+    let smooth = crate::mesh::skin::smoothstep;
     let below = (centre[1] - JAW_FROM * width - p[1]) / ((JAW_TO - JAW_FROM) * width);
     let front = (p[2] - hinge[2]) / (0.5 * width);
     JAW_WEIGHT_MAX * smooth(below) * smooth(front)
