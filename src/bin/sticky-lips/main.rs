@@ -1123,20 +1123,7 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
         .map_err(|e| Error::io(&path, e))?;
     // and a picture of its material groups
     if let Some(cols) = &problem.physics.lip_columns {
-        use paper::look::{element_codes, render, Paint, BLUE, GREEN, RED, WHITE};
-        let codes = element_codes(&problem);
-        let colour = |e: u32| [BLUE, RED, GREEN][codes[e as usize] as usize];
-        let zero = vec![[0.0; 3]; problem.mesh.nodes.len()];
-        let img = render(
-            &problem,
-            cols,
-            &zero,
-            &[],
-            Paint::Elements(&colour),
-            WHITE,
-            900,
-            560,
-        );
+        let img = paper::look::groups_picture(&problem, cols, 900, 560);
         sticky_lips::render::save_png(&a.out.join("groups.png"), &img)?;
     }
     for n in src.data.notes.iter().chain(&model.notes) {

@@ -116,6 +116,15 @@ pub fn render(
     }
 }
 
+/// The material groups at rest (Fig. 2's picture): upper face blue, lower face red, saliva
+/// green.
+pub fn groups_picture(p: &Problem, cols: &LipColumns, w: u32, h: u32) -> Image {
+    let codes = element_codes(p);
+    let colour = |e: u32| [BLUE, RED, GREEN][codes[e as usize] as usize];
+    let zero = vec![[0.0; 3]; p.mesh.nodes.len()];
+    render(p, cols, &zero, &[], Paint::Elements(&colour), WHITE, w, h)
+}
+
 /// The skin's colour per element: lips where the CC0 lips mask is white at the element's
 /// texture coordinates (the mean of its skin corners'), skin elsewhere, blended between;
 /// the saliva a darker red. Without texture coordinates, lips are the saliva only.

@@ -1,6 +1,6 @@
 //! Fig. 2: the material regions (soft tissue of the upper and lower face, the saliva layer).
 
-use crate::paper::look::{element_codes, render, Paint, BLUE, GREEN, RED, WHITE};
+use crate::paper::look::{element_codes, groups_picture, BLUE, GREEN, RED, WHITE};
 use crate::paper::{Context, Output};
 use serde_json::json;
 use sticky_lips::error::Result;
@@ -10,18 +10,7 @@ pub fn produce(ctx: &Context) -> Result<Output> {
     let run = ctx.run("fig4_sticky");
     let p = &run.problem;
     let codes = element_codes(p);
-    let colour = |e: u32| [BLUE, RED, GREEN][codes[e as usize] as usize];
-    let zero = vec![[0.0; 3]; p.mesh.nodes.len()];
-    let img = render(
-        p,
-        &run.measures.columns,
-        &zero,
-        &[],
-        Paint::Elements(&colour),
-        WHITE,
-        900,
-        560,
-    );
+    let img = groups_picture(p, &run.measures.columns, 900, 560);
     let legend = Image::legend(
         &[
             ("soft tissue, upper face", BLUE),
