@@ -13,18 +13,23 @@
 
 use crate::error::{Error, Location, Result};
 
+/// Seconds per key time unit: 1, or `1 / fps` where the times are frame numbers; an error
+/// naming `field` in `name` for a rate that is not positive and finite.
+pub fn time_scale(fps: Option<f64>, name: &str, field: &str) -> Result<f64> {
+    match fps {
+        None => Ok(1.0),
+        Some(f) if f.is_finite() && f > 0.0 => Ok(1.0 / f),
+        Some(f) => Err(Error::input(
+            name,
+            Location::Field(field.into()),
+            format!("must be a positive frame rate, got {f}"),
+        )),
+    }
+}
+
 /// Parses the text of a keys file (`name` for messages); times in seconds.
 pub fn parse_keys(text: &str, name: &str, fps: Option<f64>) -> Result<Vec<(f64, f64)>> {
-    if let Some(f) = fps {
-        if !(f.is_finite() && f > 0.0) {
-            return Err(Error::input(
-                name,
-                Location::Field("keys_fps".into()),
-                format!("must be a positive frame rate, got {f}"),
-            ));
-        }
-    }
-    let scale = fps.map_or(1.0, |f| 1.0 / f);
+    let scale = time_scale(fps, name, "keys_fps")?;
     let first = text.trim_start().chars().next();
     let keys = if matches!(first, Some('[') | Some('{')) {
         parse_json(text, name)?

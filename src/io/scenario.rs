@@ -1012,16 +1012,8 @@ impl Reader<'_> {
                 ))
             }
             (Some(k), None) => {
-                let scale = c.keys_fps.map_or(1.0, |f| 1.0 / f);
-                if let Some(f) = c.keys_fps {
-                    if !(f.is_finite() && f > 0.0) {
-                        return Err(Error::field(
-                            self.f,
-                            format!("{field}.keys_fps"),
-                            format!("must be a positive frame rate, got {f}"),
-                        ));
-                    }
-                }
+                let scale =
+                    crate::io::keys::time_scale(c.keys_fps, self.f, &format!("{field}.keys_fps"))?;
                 (
                     k.iter().map(|p| (p[0] * scale, p[1])).collect(),
                     self.f.to_string(),
