@@ -60,7 +60,7 @@ fn bench(c: &mut Criterion) {
             .map(|p| p.map(|x| x as f32))
             .collect();
         let frames = vec![pts.clone()];
-        let faces: Vec<Vec<u32>> = skin.surface.quads.iter().map(|q| q.to_vec()).collect();
+        let faces: Vec<Vec<u32>> = skin.surface.faces.clone();
         g.bench_function("encode_frame", |b| {
             b.iter(|| {
                 let pc2 = pc2_bytes(&frames, 0.0);

@@ -9,9 +9,21 @@ Every variant keeps only the vertices the head's faces use (the hm08 OBJ lists t
 
   mm_zup   the head in millimetres with Blender's axes: z up, -y forward (x unchanged), the
            rig's hinge and blend shapes moved with it; vertex order and faces unchanged;
-  cm_xfwd  in centimetres, z up, +x forward (a rotation of the axes), its unit not given:
-           `face` detects it from the head's size;
-  mm_zup_norig  mm_zup without its rig (no rig.json): `face` estimates the jaw.
+  cm_xfwd  in centimetres, z up, +x forward (a rotation of the axes), neither its unit nor its
+           axes given: `face` detects the unit from the head's size and the axes from the mouth;
+  mm_zup_norig  mm_zup without its rig (no rig.json): `face` estimates the jaw;
+  mixed_mm_zup  mm_zup with the quads on the subject's left (x > 0) each split into two
+           triangles: a mesh of quads and triangles; its axes not given (detected);
+  tri_m    every quad split into two triangles, then decimated to 5000 triangles (quadric
+           edge collapse, PyPI pyfqmr; 2524 vertices), in metres with y up and z forward (no
+           axes or unit given); the rig moved to the new vertices from the nearest old one.
+
+    python scripts/face_meshes.py --contours REF_FACE_DIR FACE_DIR ...
+
+compares the inner lip contours (face.json) of faces made by `sticky-lips face` with those
+of REF_FACE_DIR (all in the model frame, metres): the mean and largest distance of each
+contour's vertices from the reference's polyline, printed, and asserted below
+CONTOUR_MEAN_MM and CONTOUR_MAX_MM.
 """
 
 import json
@@ -86,16 +98,68 @@ def rot_xfwd(v):
     return [z, x, y]
 
 
+def triangulate(text, which):
+    """Each quad for which `which(corner positions)` holds split into two triangles (corners
+    0 1 2 and 0 2 3, same winding)."""
+    verts = [[float(t) for t in ln.split()[1:4]] for ln in text.splitlines() if ln.startswith("v ")]
+    out = []
+    for line in text.splitlines():
+        if line.startswith("f "):
+            c = line.split()[1:]
+            if len(c) == 4 and which([verts[int(t.split("/")[0]) - 1] for t in c]):
+                out.append(f"f {c[0]} {c[1]} {c[2]}")
+                out.append(f"f {c[0]} {c[2]} {c[3]}")
+                continue
+        out.append(line)
+    return "\n".join(out) + "\n"
+
+
+def decimated(text, rig, triangles):
+    """The head triangulated and decimated to `triangles` triangles (pyfqmr), its rig's
+    per-vertex data from the nearest old vertex."""
+    import numpy as np
+    import pyfqmr
+    from scipy.spatial import cKDTree
+    tri = triangulate(text, lambda c: True)
+    verts = np.array([[float(t) for t in ln.split()[1:4]] for ln in tri.splitlines() if ln.startswith("v ")])
+    faces = np.array([[int(t.split("/")[0]) - 1 for t in ln.split()[1:]]
+                      for ln in tri.splitlines() if ln.startswith("f ")], dtype=np.int32)
+    simp = pyfqmr.Simplify()
+    simp.setMesh(verts, faces)
+    simp.simplify_mesh(target_count=triangles, aggressiveness=7, preserve_border=True, verbose=False)
+    v, f, _ = simp.getMesh()
+    obj = "".join("v %r %r %r\n" % tuple(float(x) for x in p) for p in v)
+    obj += "".join("f %d %d %d\n" % tuple(int(x) + 1 for x in t) for t in f)
+    _, near = cKDTree(verts).query(v)
+    r = dict(rig)
+    if r.get("jaw_weight") is not None:
+        r["jaw_weight"] = [rig["jaw_weight"][i] for i in near]
+    r["targets"] = {k: [t[i] for i in near] for k, t in rig.get("targets", {}).items()}
+    return obj, r
+
+
+def identity(p):
+    return list(p)
+
+
 VARIANTS = {
     "mm_zup": (mm_zup, lambda v: [100.0 * c for c in rot_zup(v)], rot_zup,
                ["--units", "mm", "--up", "0,0,1", "--forward", "0,-1,0"]),
-    # no --units: `face` finds centimetres from the head's size
-    "cm_xfwd": (cm_xfwd, lambda v: [10.0 * c for c in rot_xfwd(v)], rot_xfwd,
-                ["--up", "0,0,1", "--forward", "1,0,0"]),
+    # no --units, --up or --forward: `face` finds centimetres from the head's size and the
+    # axes from the mouth
+    "cm_xfwd": (cm_xfwd, lambda v: [10.0 * c for c in rot_xfwd(v)], rot_xfwd, []),
     # no rig: `face` estimates the jaw's weights and hinge (written without rig.json)
     "mm_zup_norig": (mm_zup, lambda v: [100.0 * c for c in rot_zup(v)], rot_zup,
                      ["--units", "mm", "--up", "0,0,1", "--forward", "0,-1,0"]),
+    # quads on the right, triangles on the left; the axes detected
+    "mixed_mm_zup": (mm_zup, lambda v: [100.0 * c for c in rot_zup(v)], rot_zup, ["--units", "mm"]),
+    # decimated triangles, metres, the default axes, no unit given
+    "tri_m": (lambda p: [0.1 * c for c in p], lambda v: [0.1 * c for c in v], identity, []),
 }
+
+# the contours of a face made from a triangulated or decimated head against the quad head's
+CONTOUR_MEAN_MM = 1.0
+CONTOUR_MAX_MM = 2.0
 
 
 def main(head_dir, out_dir):
@@ -104,14 +168,20 @@ def main(head_dir, out_dir):
     for name, (point, offset, axis, args) in VARIANTS.items():
         d = os.path.join(out_dir, name)
         os.makedirs(d, exist_ok=True)
+        mesh, base = head, rig
+        if name.startswith("mixed"):
+            # the subject's left: x > 0 in the head's own frame (decimetres, y up, z forward)
+            mesh = triangulate(head, lambda c: sum(p[0] for p in c) > 0.0)
+        elif name.startswith("tri"):
+            mesh, base = decimated(head, rig, 5000)
         with open(os.path.join(d, "head.obj"), "w") as f:
-            f.write(transform_obj(head, point))
-        r = dict(rig)
+            f.write(transform_obj(mesh, point))
+        r = dict(base)
         if r.get("hinge_point") is not None:
             r["hinge_point"] = point(r["hinge_point"])
         if r.get("hinge_axis") is not None:
             r["hinge_axis"] = axis(r["hinge_axis"])
-        r["targets"] = {k: [offset(v) for v in t] for k, t in rig.get("targets", {}).items()}
+        r["targets"] = {k: [offset(v) for v in t] for k, t in base.get("targets", {}).items()}
         if not name.endswith("_norig"):
             with open(os.path.join(d, "rig.json"), "w") as f:
                 json.dump(r, f)
@@ -120,5 +190,37 @@ def main(head_dir, out_dir):
         print(f"{d}: {' '.join(args)}")
 
 
+def contours(ref_dir, dirs):
+    import numpy as np
+
+    def load(d):
+        j = json.load(open(os.path.join(d, "face.json")))
+        vs = np.array([[float(t) for t in ln.split()[1:4]]
+                       for ln in open(os.path.join(d, "face.obj")) if ln.startswith("v ")])
+        return {k: vs[j[k]] for k in ("upper_contour", "lower_contour")}
+
+    def to_polyline(p, line):
+        a, b = line[:-1], line[1:]
+        ab = b - a
+        t = np.clip(np.einsum("ij,ij->i", p - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-30), 0, 1)
+        return np.min(np.linalg.norm(p - (a + t[:, None] * ab), axis=1))
+
+    ref = load(ref_dir)
+    bad = []
+    for d in dirs:
+        got = load(d)
+        for k in ref:
+            ds = 1e3 * np.array([to_polyline(p, ref[k]) for p in got[k]])
+            print(f"{d}: {k} {len(got[k])} vertices, from {ref_dir}'s: mean {ds.mean():.2f} mm, "
+                  f"largest {ds.max():.2f} mm")
+            if ds.mean() > CONTOUR_MEAN_MM or ds.max() > CONTOUR_MAX_MM:
+                bad.append(f"{d} {k}")
+    if bad:
+        sys.exit(f"contours too far from the reference's: {bad}")
+
+
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2])
+    if sys.argv[1] == "--contours":
+        contours(sys.argv[2], sys.argv[3:])
+    else:
+        main(sys.argv[1], sys.argv[2])

@@ -170,6 +170,10 @@ if [ -s "$OUT/makehuman-head/head.obj" ]; then
     cp "$m/head.obj" "$m/face/run/input.obj"
     ANIM="$ANIM:$m/face/run"
   done
+  # the contours found on triangles (decimated, mixed) and with the axes detected lie where
+  # the quad head's loop finder puts them
+  "$PY" scripts/face_meshes.py --contours "$OUT/face_meshes/mm_zup/face" "$OUT/face_meshes/cm_xfwd/face" \
+    "$OUT/face_meshes/mixed_mm_zup/face" "$OUT/face_meshes/tri_m/face"
 fi
 # a run made without the files (the paper's) gets them from `export`
 "$BIN" export "$OUT/paper-procedural/runs/fig4_sticky"

@@ -155,7 +155,7 @@ pub fn export(skin: &Skin, dir: &Path) -> Result<ExportSummary> {
         *v = fr.to_user(*v);
     }
     let rest32: Vec<[f32; 3]> = rest.vertices.iter().map(|&p| to32(p)).collect();
-    let faces: Vec<Vec<u32>> = skin.surface.quads.iter().map(|q| q.to_vec()).collect();
+    let faces: &[Vec<u32>] = &skin.surface.faces;
     let saliva_faces: Vec<Vec<u32>> = saliva_quads
         .iter()
         .map(|&q| skin.model.quads[q].to_vec())
@@ -183,7 +183,7 @@ pub fn export(skin: &Skin, dir: &Path) -> Result<ExportSummary> {
     };
     let mut meshes = vec![UsdMesh {
         name: "skin",
-        faces: &faces,
+        faces,
         rest: &rest32,
         frames: &frames,
         uv: uv32.as_deref(),
@@ -213,7 +213,7 @@ pub fn export(skin: &Skin, dir: &Path) -> Result<ExportSummary> {
         meshes,
     });
     let mut obj = Vec::new();
-    crate::io::obj::write_obj_to(&mut obj, &rest)
+    crate::io::obj::write_polygons_to(&mut obj, &rest)
         .map_err(|e| Error::io(dir.join("skin.obj"), e))?;
     let files: [(&str, Vec<u8>); 4] = [
         ("skin.obj", obj),

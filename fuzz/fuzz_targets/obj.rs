@@ -1,5 +1,5 @@
-//! A quad-surface OBJ (what `extrude` and `face` read): parsed, and a surface it gives
-//! extruded into hexahedra and validated.
+//! An OBJ surface: read as polygons (what `face` reads), made quads and validated; read as a
+//! quad surface (what `extrude` reads), extruded into hexahedra and validated.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 #[path = "common.rs"]
@@ -9,6 +9,11 @@ fuzz_target!(|data: &[u8]| {
     let Some(text) = common::text(data) else {
         return;
     };
+    if let Ok(p) = sticky_lips::io::obj::parse_polygons(text, "fuzz.obj") {
+        if p.validate("fuzz.obj").is_ok() {
+            let _ = p.to_quads().surface.validate("fuzz.obj");
+        }
+    }
     let Ok(s) = sticky_lips::io::obj::parse_obj(text, "fuzz.obj") else {
         return;
     };

@@ -24,7 +24,7 @@
 //! materials (as in the paper's Fig. 2) and the quad order is kept.
 
 use crate::error::{Error, Location, Result};
-use crate::mesh::surface::QuadSurface;
+use crate::mesh::surface::{PolySurface, QuadSurface};
 use std::io::Write;
 use std::path::Path;
 
@@ -96,7 +96,38 @@ fn parse_f64(tok: Option<&str>, what: &str, file: &str, line: usize) -> Result<f
 
 /// Parses OBJ text; `file` names it in errors.
 pub fn parse_obj(text: &str, file: &str) -> Result<QuadSurface> {
-    assemble(read_statements(text, file)?, file)
+    let p = assemble(read_statements(text, file, Faces::Quads)?, file)?;
+    Ok(QuadSurface {
+        vertices: p.vertices,
+        uv: p.uv,
+        // read_statements took only faces of four corners
+        quads: p.faces.iter().map(|f| [f[0], f[1], f[2], f[3]]).collect(),
+        group_of_quad: p.group_of_face,
+        groups: p.groups,
+        quad_lines: p.face_lines,
+        notes: p.notes,
+    })
+}
+
+/// Reads an OBJ file of any polygons (triangles, quads, more corners): a user's mesh for
+/// `sticky-lips face`, which makes it quads with [`PolySurface::to_quads`].
+pub fn read_polygons(path: &Path) -> Result<PolySurface> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_polygons(&text, &path.display().to_string())
+}
+
+/// Parses OBJ text of any polygons of three or more corners; `file` names it in errors.
+pub fn parse_polygons(text: &str, file: &str) -> Result<PolySurface> {
+    assemble(read_statements(text, file, Faces::Polygons)?, file)
+}
+
+/// Which faces a reader takes.
+#[derive(Clone, Copy, PartialEq)]
+enum Faces {
+    /// Only quads (the surfaces extruded into hexahedra).
+    Quads,
+    /// Any polygon of three or more corners.
+    Polygons,
 }
 
 /// The statements of an OBJ file that matter here, as read: indices still unchecked against
@@ -104,17 +135,17 @@ pub fn parse_obj(text: &str, file: &str) -> Result<QuadSurface> {
 struct Statements {
     vertices: Vec<[f64; 3]>,
     texcoords: Vec<[f64; 2]>,
-    /// Each quad's corners, its line and its group.
-    faces: Vec<([Corner; 4], usize, u32)>,
+    /// Each face's corners, its line and its group.
+    faces: Vec<(Vec<Corner>, usize, u32)>,
     groups: Vec<String>,
 }
 
 /// Reads the `v`, `vt`, `g`/`usemtl` and `f` statements, joining continued lines and
 /// dropping comments.
-fn read_statements(text: &str, file: &str) -> Result<Statements> {
+fn read_statements(text: &str, file: &str, take: Faces) -> Result<Statements> {
     let mut vertices: Vec<[f64; 3]> = Vec::new();
     let mut texcoords: Vec<[f64; 2]> = Vec::new();
-    let mut faces: Vec<([Corner; 4], usize, u32)> = Vec::new();
+    let mut faces: Vec<(Vec<Corner>, usize, u32)> = Vec::new();
     let mut groups: Vec<String> = Vec::new();
     let mut current: String = "default".to_string();
     let mut current_index: Option<u32> = None;
@@ -177,7 +208,17 @@ fn read_statements(text: &str, file: &str) -> Result<Statements> {
             }
             "f" => {
                 let corners: Vec<&str> = toks.collect();
-                if corners.len() != 4 {
+                if take == Faces::Polygons && corners.len() < 3 {
+                    return Err(Error::input(
+                        file,
+                        Location::Line(line_no),
+                        format!(
+                            "face has {} vertices (degenerate): a face needs at least 3",
+                            corners.len()
+                        ),
+                    ));
+                }
+                if take == Faces::Quads && corners.len() != 4 {
                     let what = match corners.len() {
                         3 => " (a triangle)".to_string(),
                         0..=2 => " (degenerate)".to_string(),
@@ -221,7 +262,7 @@ fn read_statements(text: &str, file: &str) -> Result<Statements> {
     })
 }
 
-/// The four corners `v[/t[/n]]` of an `f` statement (`nv` vertices and `nt` texture
+/// The corners `v[/t[/n]]` of an `f` statement (`nv` vertices and `nt` texture
 /// coordinates defined so far, for negative indices).
 fn parse_corners(
     corners: &[&str],
@@ -229,8 +270,8 @@ fn parse_corners(
     nt: usize,
     file: &str,
     line_no: usize,
-) -> Result<[Corner; 4]> {
-    let mut c = [Corner { v: 0, t: None }; 4];
+) -> Result<Vec<Corner>> {
+    let mut c = vec![Corner { v: 0, t: None }; corners.len()];
     for (k, tok) in corners.iter().enumerate() {
         let mut parts = tok.split('/');
         let vi = parts.next().unwrap_or("");
@@ -246,9 +287,9 @@ fn parse_corners(
     Ok(c)
 }
 
-/// The quad surface: every index checked, texture coordinates per vertex (the first of a
-/// seam kept, with a note), groups in order of their first face.
-fn assemble(st: Statements, file: &str) -> Result<QuadSurface> {
+/// The surface: every index checked, texture coordinates per vertex (the first of a seam
+/// kept, with a note), groups in order of their first face.
+fn assemble(st: Statements, file: &str) -> Result<PolySurface> {
     let Statements {
         vertices,
         texcoords,
@@ -266,7 +307,7 @@ fn assemble(st: Statements, file: &str) -> Result<QuadSurface> {
     let mut seams = 0usize;
     let mut any_uv = false;
     for (c, line, g) in &faces {
-        let mut q = [0u32; 4];
+        let mut q = vec![0u32; c.len()];
         for (k, corner) in c.iter().enumerate() {
             if corner.v as usize >= nv {
                 return Err(Error::input(
@@ -326,13 +367,13 @@ fn assemble(st: Statements, file: &str) -> Result<QuadSurface> {
             Some(uv)
         }
     };
-    Ok(QuadSurface {
+    Ok(PolySurface {
         vertices,
         uv,
-        quads,
-        group_of_quad,
+        faces: quads,
+        group_of_face: group_of_quad,
         groups,
-        quad_lines,
+        face_lines: quad_lines,
         notes,
     })
 }
@@ -346,20 +387,43 @@ pub fn write_obj_to(w: &mut dyn Write, s: &QuadSurface) -> std::io::Result<()> {
         s.quads.len(),
         s.groups.len()
     )?;
-    for x in &s.vertices {
+    let faces = s.quads.iter().map(|q| &q[..]).zip(&s.group_of_quad);
+    write_body(w, &s.vertices, s.uv.as_deref(), faces, &s.groups)
+}
+
+/// Writes a polygon surface as OBJ text into `w` (as [`write_obj_to`], faces of any size).
+pub fn write_polygons_to(w: &mut dyn Write, s: &PolySurface) -> std::io::Result<()> {
+    writeln!(
+        w,
+        "# sticky-lips surface: {} vertices, {} faces, {} groups",
+        s.vertices.len(),
+        s.faces.len(),
+        s.groups.len()
+    )?;
+    let faces = s.faces.iter().map(|f| &f[..]).zip(&s.group_of_face);
+    write_body(w, &s.vertices, s.uv.as_deref(), faces, &s.groups)
+}
+
+/// Vertices, texture coordinates and faces with a `g`/`usemtl` pair at each change of group.
+fn write_body<'a>(
+    w: &mut dyn Write,
+    vertices: &[[f64; 3]],
+    uv: Option<&[[f64; 2]]>,
+    faces: impl Iterator<Item = (&'a [u32], &'a u32)>,
+    groups: &[String],
+) -> std::io::Result<()> {
+    for x in vertices {
         writeln!(w, "v {} {} {}", x[0], x[1], x[2])?;
     }
-    if let Some(uv) = &s.uv {
+    if let Some(uv) = uv {
         for t in uv {
             writeln!(w, "vt {} {}", t[0], t[1])?;
         }
     }
     let mut last: Option<u32> = None;
-    for (q, quad) in s.quads.iter().enumerate() {
-        let g = s.group_of_quad[q];
+    for (face, &g) in faces {
         if last != Some(g) {
-            let name = s
-                .groups
+            let name = groups
                 .get(g as usize)
                 .map(String::as_str)
                 .unwrap_or("default");
@@ -367,12 +431,15 @@ pub fn write_obj_to(w: &mut dyn Write, s: &QuadSurface) -> std::io::Result<()> {
             writeln!(w, "usemtl {name}")?;
             last = Some(g);
         }
-        let [a, b, c, d] = quad.map(|i| i + 1);
-        if s.uv.is_some() {
-            writeln!(w, "f {a}/{a} {b}/{b} {c}/{c} {d}/{d}")?;
-        } else {
-            writeln!(w, "f {a} {b} {c} {d}")?;
+        write!(w, "f")?;
+        for &i in face {
+            if uv.is_some() {
+                write!(w, " {}/{}", i + 1, i + 1)?;
+            } else {
+                write!(w, " {}", i + 1)?;
+            }
         }
+        writeln!(w)?;
     }
     Ok(())
 }
@@ -499,5 +566,31 @@ f -5/-5 -4/-4 -1/-1 -2/-2
         let s = parse_obj(text, "m.obj").unwrap();
         assert!(s.uv.is_none());
         assert_eq!(s.notes.len(), 1);
+    }
+
+    #[test]
+    fn polygons_are_read_and_written_back_as_they_are() {
+        let text = "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nv 1 1 0\nv 2 1 0\nv 3 0.5 0\n\
+                    f 1 2 5 4\ng tri\nf 2 3 6\nf 2 6 5\nf 3 7 6 # a fan\nf 1 2 3 7 6 5 4\n";
+        let p = parse_polygons(text, "p.obj").unwrap();
+        assert_eq!(p.faces.len(), 5);
+        assert_eq!(p.faces[1], vec![1, 2, 5]);
+        assert_eq!(p.faces[4].len(), 7);
+        assert_eq!(p.face_lines, vec![8, 10, 11, 12, 13]);
+        assert_eq!(p.groups, vec!["default", "tri"]);
+        let mut out = Vec::new();
+        write_polygons_to(&mut out, &p).unwrap();
+        let back = parse_polygons(std::str::from_utf8(&out).unwrap(), "back.obj").unwrap();
+        assert_eq!(back.vertices, p.vertices);
+        assert_eq!(back.faces, p.faces);
+        assert_eq!(back.group_of_face, p.group_of_face);
+        // the quad reader still refuses the triangles, naming the first one's line
+        let e = parse_obj(text, "p.obj").unwrap_err().to_string();
+        assert!(e.contains("p.obj:10") && e.contains("triangle"), "{e}");
+        // and a two-corner face is refused by both
+        let e = parse_polygons("v 0 0 0\nv 1 0 0\nf 1 2\n", "d.obj")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("d.obj:3") && e.contains("degenerate"), "{e}");
     }
 }

@@ -20,9 +20,14 @@
 //!
 //! The positions are written in the user's units and axes ([`OutputFrame`]), so that the
 //! user's mesh plays the point caches unchanged.
+//!
+//! A mesh of triangles or other polygons ([`Skin::tie_polygons`]) is tied through its quad
+//! refinement ([`PolySurface::to_quads`]): the weights are computed on the refined mesh
+//! (whose first vertices are the user's) and kept for the user's vertices, and the files
+//! carry the user's own faces.
 
 use crate::error::{Error, Result};
-use crate::mesh::surface::QuadSurface;
+use crate::mesh::surface::{PolySurface, QuadSurface};
 use crate::problem::boundary::PrescribedRotation;
 
 /// How vertices are tied to the model's surface (SI metres).
@@ -89,8 +94,8 @@ pub struct SkinWeight {
 pub struct Skin {
     /// Where the mesh comes from (for the files' metadata).
     pub name: String,
-    /// The mesh at rest in the model frame (metres): vertices in the user's order, its quads.
-    pub surface: QuadSurface,
+    /// The mesh at rest in the model frame (metres): vertices in the user's order, its faces.
+    pub surface: PolySurface,
     pub weights: Vec<SkinWeight>,
     /// The model's outer surface (model frame, m; vertex `v` is node `v`), for the saliva
     /// layer's faces.
@@ -113,6 +118,55 @@ impl Skin {
     pub fn tie(
         name: &str,
         mesh: QuadSurface,
+        jaw_weight: &[f64],
+        model: &QuadSurface,
+        front: Option<&[bool]>,
+        frame: OutputFrame,
+        params: &SkinParams,
+    ) -> Result<Skin> {
+        let poly = PolySurface::from_quads(&mesh);
+        let mut skin = Self::tie_quads(name, &mesh, jaw_weight, model, front, frame, params)?;
+        skin.surface = poly;
+        Ok(skin)
+    }
+
+    /// [`Skin::tie`] for a mesh of any polygons: tied through its quad refinement
+    /// ([`PolySurface::to_quads`], module docs). `jaw_weight` is per vertex of `mesh`;
+    /// `front`, where given, per vertex of the refined mesh (its first vertices are
+    /// `mesh`'s). The skin plays `mesh`'s vertices and faces.
+    pub fn tie_polygons(
+        name: &str,
+        mesh: &PolySurface,
+        jaw_weight: &[f64],
+        model: &QuadSurface,
+        front: Option<&[bool]>,
+        frame: OutputFrame,
+        params: &SkinParams,
+    ) -> Result<Skin> {
+        if jaw_weight.len() != mesh.vertices.len() {
+            return Err(Error::field(
+                name,
+                "jaw_weight",
+                format!(
+                    "has {} values for {} vertices",
+                    jaw_weight.len(),
+                    mesh.vertices.len()
+                ),
+            ));
+        }
+        let refined = mesh.to_quads();
+        let jaw = refined.extend_scalar(jaw_weight);
+        let mut skin = Self::tie_quads(name, &refined.surface, &jaw, model, front, frame, params)?;
+        skin.weights.truncate(mesh.vertices.len());
+        skin.counts = counts(&skin.weights);
+        skin.surface = mesh.clone();
+        Ok(skin)
+    }
+
+    /// The tie on a quad mesh (the skin's `surface` left empty for the callers to set).
+    fn tie_quads(
+        name: &str,
+        mesh: &QuadSurface,
         jaw_weight: &[f64],
         model: &QuadSurface,
         front: Option<&[bool]>,
@@ -173,26 +227,16 @@ impl Skin {
             })
             .collect();
         if front.is_some() {
-            inherit_along_edges(&mesh, &mut weights, &is_front, params.band);
-        }
-        let mut counts = [0usize; 3];
-        for w in &weights {
-            counts[if w.f == 1.0 {
-                0
-            } else if w.f > 0.0 {
-                1
-            } else {
-                2
-            }] += 1;
+            inherit_along_edges(mesh, &mut weights, &is_front, params.band);
         }
         Ok(Skin {
             name: name.to_string(),
-            surface: mesh,
+            surface: PolySurface::default(),
+            counts: counts(&weights),
             weights,
             model: model.clone(),
             frame,
             jaw: None,
-            counts,
         })
     }
 
@@ -236,6 +280,21 @@ impl Skin {
             .flat_map(|w| w.nodes)
             .max()
     }
+}
+
+/// Vertices over the model, beside it, and elsewhere.
+fn counts(weights: &[SkinWeight]) -> [usize; 3] {
+    let mut counts = [0usize; 3];
+    for w in weights {
+        counts[if w.f == 1.0 {
+            0
+        } else if w.f > 0.0 {
+            1
+        } else {
+            2
+        }] += 1;
+    }
+    counts
 }
 
 /// Vertices off the front take the model weights of the nearest front vertex that has any
@@ -788,5 +847,65 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("head.json") && e.contains("jaw_weight"), "{e}");
+    }
+
+    #[test]
+    fn a_mesh_of_triangles_plays_its_own_vertices_and_faces() {
+        // two triangles over quad (1, 0), split along a diagonal, plus a vertex off the model
+        let m = model();
+        let tri = PolySurface {
+            vertices: vec![
+                [0.012, 0.002, 0.0],
+                [0.018, 0.002, 0.0],
+                [0.018, 0.008, 0.0],
+                [0.012, 0.008, 0.0],
+            ],
+            uv: None,
+            faces: vec![vec![0, 1, 2], vec![0, 2, 3]],
+            group_of_face: vec![0, 0],
+            groups: vec!["skin".into()],
+            face_lines: vec![],
+            notes: vec![],
+        };
+        let skin = Skin::tie_polygons(
+            "t",
+            &tri,
+            &[0.0; 4],
+            &m,
+            None,
+            OutputFrame::metres(),
+            &SkinParams::default(),
+        )
+        .unwrap();
+        // the user's vertices and faces, each tied as it would be alone
+        assert_eq!(skin.surface, tri);
+        assert_eq!(skin.weights.len(), 4);
+        assert_eq!(skin.counts, [4, 0, 0]);
+        for (k, p) in tri.vertices.iter().enumerate() {
+            let alone = Skin::tie(
+                "t",
+                mesh(&[*p]),
+                &[0.0],
+                &m,
+                None,
+                OutputFrame::metres(),
+                &SkinParams::default(),
+            )
+            .unwrap();
+            assert_eq!(skin.weights[k], alone.weights[0]);
+        }
+        // the front flags are per vertex of the refined mesh (4 + 5 edges + 2 centres)
+        let e = Skin::tie_polygons(
+            "t",
+            &tri,
+            &[0.0; 4],
+            &m,
+            Some(&[true; 4]),
+            OutputFrame::metres(),
+            &SkinParams::default(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("4 of 11"), "{e}");
     }
 }

@@ -182,7 +182,8 @@ enum Command {
     /// source (face.obj, face.json) and the model at --resolution (model.obj with the saliva
     /// strip, mesh.vtu, model.xml).
     Face {
-        /// The head: Wavefront OBJ of quads (texture coordinates kept).
+        /// The head: Wavefront OBJ of quads, triangles or other polygons (a face of n corners
+        /// becomes n quads; texture coordinates kept).
         input: PathBuf,
         /// Rig data on the head's vertices (JSON: source, jaw_weight, hinge_point, hinge_axis,
         /// targets), in the head's units and axes.
@@ -192,11 +193,12 @@ enum Command {
         /// the head's largest extent is a head's (0.12 to 0.45 m), refused when several are.
         #[arg(long, default_value = "auto")]
         units: String,
-        /// The face's up axis in the input, X,Y,Z.
-        #[arg(long, default_value = "0,1,0")]
+        /// The face's up axis in the input, X,Y,Z; `auto` (with --forward auto): detected from
+        /// the mouth, among the file's coordinate axes.
+        #[arg(long, default_value = "auto")]
         up: String,
-        /// The face's forward axis (out of the face) in the input, X,Y,Z.
-        #[arg(long, default_value = "0,0,1")]
+        /// The face's forward axis (out of the face) in the input, X,Y,Z; or `auto`.
+        #[arg(long, default_value = "auto")]
         forward: String,
         /// Crop parameters (TOML: half_width, below, above, min_facing, pinch, min_mouth_width; metres).
         #[arg(long)]
@@ -984,14 +986,14 @@ fn unit_scale(name: &str) -> Option<f64> {
     }
 }
 
-/// The unit in which a head's largest extent (of the vertices its quads use) is that of a
+/// The unit in which a head's largest extent (of the vertices its faces use) is that of a
 /// human head, 0.12 to 0.45 m; an error naming the candidates when none or several are.
 fn detect_units(
-    head: &sticky_lips::mesh::surface::QuadSurface,
+    head: &sticky_lips::mesh::surface::PolySurface,
     file: &str,
 ) -> sticky_lips::Result<(&'static str, f64)> {
     let (lo, hi) = sticky_lips::linalg::bounding_box(
-        head.quads
+        head.faces
             .iter()
             .flatten()
             .map(|&v| &head.vertices[v as usize]),
@@ -1025,8 +1027,25 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
     let t0 = std::time::Instant::now();
     let file = a.input.display().to_string();
     // the command line's values first, then the files
-    let up = sticky_lips::io::args::vec3(a.up, "--up")?;
-    let forward = sticky_lips::io::args::vec3(a.forward, "--forward")?;
+    let detect = match (a.up == "auto", a.forward == "auto") {
+        (true, true) => true,
+        (false, false) => false,
+        _ => {
+            return Err(Error::input(
+                "command line",
+                Location::Field(if a.up == "auto" { "--up" } else { "--forward" }.into()),
+                "give both --up and --forward, or neither (both detected)",
+            ))
+        }
+    };
+    let given = if detect {
+        None
+    } else {
+        Some((
+            sticky_lips::io::args::vec3(a.up, "--up")?,
+            sticky_lips::io::args::vec3(a.forward, "--forward")?,
+        ))
+    };
     if a.units != "auto" && unit_scale(a.units).is_none() {
         return Err(Error::input(
             "command line",
@@ -1034,7 +1053,7 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
             format!("unknown unit `{}` (m, dm, cm, mm, in or auto)", a.units),
         ));
     }
-    let head = sticky_lips::io::obj::read_obj(a.input)?;
+    let head = sticky_lips::io::obj::read_polygons(a.input)?;
     let scale = if a.units == "auto" {
         let (unit, scale) = detect_units(&head, &file)?;
         println!("face: units {unit}, from the head's size (give --units to choose)");
@@ -1048,7 +1067,6 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
             )
         })?
     };
-    let frame = face::InputFrame { scale, up, forward };
     let rig: face::FaceRig = match a.rig {
         Some(p) => {
             let text = std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?;
@@ -1076,7 +1094,18 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
         }
         None => face::PrepareParams::default(),
     };
-    let src = face::prepare(&head, &rig, frame, &params, &file)?;
+    let (up, forward, axes_note) = match given {
+        Some((up, forward)) => (up, forward, None),
+        None => {
+            let d = face::lips::detect_axes(&head, scale, &params, &file)?;
+            (d.up, d.forward, Some(d.note))
+        }
+    };
+    let frame = face::InputFrame { scale, up, forward };
+    let mut src = face::prepare(&head, &rig, frame, &params, &file)?;
+    if let Some(n) = axes_note {
+        src.data.notes.insert(0, n);
+    }
     face::write_dir(a.out, &src)?;
     let fp = face::FaceParams {
         resolution: a.resolution,

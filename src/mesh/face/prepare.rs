@@ -38,9 +38,10 @@
 //! The input's length unit and its up and forward axes are given; everything is converted
 //! to metres in the model frame: `x` the subject's left (`up x forward`), `y` up, `z` forward.
 
+use super::lips::find_contour_general;
 use super::topology::{self, edge, Adjacency, Edge};
 use crate::error::{Error, Location, Result};
-use crate::mesh::surface::QuadSurface;
+use crate::mesh::surface::{PolySurface, QuadSurface};
 use std::collections::{BTreeMap, BTreeSet};
 
 /// Edges a vertex must be away along the surface for its distance to count as a pinch.
@@ -96,6 +97,11 @@ pub struct FaceRig {
     pub hinge_axis: Option<[f64; 3]>,
     /// Blend shapes: offsets of every input vertex (input units and axes).
     pub targets: BTreeMap<String, Vec<[f64; 3]>>,
+    /// The inner lip contour named instead of found: the input vertices (0-based, any
+    /// order, e.g. a vertex group's) along the upper lip's and the lower lip's line where the
+    /// lips meet, corners included or not. Give both or neither.
+    pub upper_lip: Option<Vec<u32>>,
+    pub lower_lip: Option<Vec<u32>>,
 }
 
 /// The model surface of a face and everything the model needs besides its mesh (metres,
@@ -110,11 +116,12 @@ pub struct FaceSource {
     pub head: Option<HeadMesh>,
 }
 
-/// The input head in the model frame (metres), in the input's vertex order, with the rig's
-/// jaw weight of every vertex (0 where the rig gives none).
+/// The input head in the model frame (metres), in the input's vertex order and with its own
+/// faces (triangles, quads or more), with the rig's jaw weight of every vertex (0 where the
+/// rig gives none).
 #[derive(Clone, Debug, PartialEq)]
 pub struct HeadMesh {
-    pub surface: QuadSurface,
+    pub surface: PolySurface,
     pub jaw_weight: Vec<f64>,
 }
 
@@ -180,7 +187,9 @@ pub struct FaceData {
     pub muscles: Vec<MuscleLandmarks>,
     /// Blend shapes: offset of every vertex (m).
     pub targets: BTreeMap<String, Vec<[f64; 3]>>,
-    /// The input vertex (0-based) each vertex was.
+    /// The input vertex (0-based) each vertex was: a vertex of the input head, or, for a
+    /// head not made of quads only, of its quad refinement (the input's vertices, then the
+    /// edge midpoints and face centres [`PolySurface::to_quads`] adds).
     pub source_vertex: Vec<u32>,
     /// What the pipeline decided, in words (contour found, counts, holes filled).
     pub notes: Vec<String>,
@@ -396,7 +405,7 @@ fn halves(s: &QuadSurface, ring: &[u32]) -> (Vec<u32>, Vec<u32>) {
 }
 
 /// Mean distance from the vertices of each half to the other half's polyline.
-fn opening(s: &QuadSurface, upper: &[u32], lower: &[u32]) -> f64 {
+pub(crate) fn opening(s: &QuadSurface, upper: &[u32], lower: &[u32]) -> f64 {
     let p = |v: u32| s.vertices[v as usize];
     let to_polyline = |q: [f64; 3], line: &[u32]| -> f64 {
         let mut best = f64::INFINITY;
@@ -529,7 +538,7 @@ pub fn mouth_line(s: &QuadSurface, upper: &[u32], lower: &[u32], x: f64) -> f64 
 /// The face pipeline's first half (module docs): `head` in input units and axes, `rig` on
 /// its vertices. `file` names the input in errors.
 pub fn prepare(
-    head: &QuadSurface,
+    head: &PolySurface,
     rig: &FaceRig,
     frame: InputFrame,
     params: &PrepareParams,
@@ -557,17 +566,66 @@ pub fn prepare(
             ));
         }
     }
-    // into metres and the model frame
-    let mut s = head.clone();
-    for v in s.vertices.iter_mut() {
+    // into metres and the model frame, then quads (a triangle becomes three)
+    let mut head_model = head.clone();
+    for v in head_model.vertices.iter_mut() {
         *v = frame.point(*v);
     }
+    head_model.validate(file)?;
+    check_one_piece(&head_model, file)?;
+    check_orientation(&head_model, file)?;
+    let refined = head_model.to_quads();
+    let s = refined.surface.clone();
     s.validate(file)?;
-    check_one_piece(&s, file)?;
-    check_orientation(&s, file)?;
-    let head_model = s.clone();
     let adj = Adjacency::new(&s);
-    let contour = find_contour(&s, &adj, params, file)?;
+    let named = match (&rig.upper_lip, &rig.lower_lip) {
+        (Some(u), Some(l)) => {
+            for (name, list) in [("upper_lip", u), ("lower_lip", l)] {
+                if let Some(v) = list.iter().find(|&&v| v as usize >= nv_in) {
+                    return Err(Error::field(
+                        file,
+                        format!("rig.{name}"),
+                        format!(
+                            "vertex {v} is out of range: the head has {nv_in} vertices (0-based)"
+                        ),
+                    ));
+                }
+            }
+            Some((u.as_slice(), l.as_slice()))
+        }
+        (None, None) => None,
+        _ => {
+            return Err(Error::field(
+                file,
+                if rig.upper_lip.is_some() {
+                    "rig.lower_lip"
+                } else {
+                    "rig.upper_lip"
+                },
+                "give both upper_lip and lower_lip, or neither (the contour is then found)",
+            ))
+        }
+    };
+    let (contour, how) = if let Some((u, l)) = named {
+        (
+            super::lips::contour_from_lists(&s, &adj, u, l, file)?,
+            "the rig's upper_lip and lower_lip",
+        )
+    } else if refined.parents.is_empty() {
+        match find_contour(&s, &adj, params, file) {
+            Ok(c) => (c, "the closed edge loop"),
+            Err(loops) => (
+                find_contour_general(&s, &adj, params, file).map_err(|_| loops)?,
+                "the lips' front edges (no closed edge loop fits)",
+            ),
+        }
+    } else {
+        (
+            find_contour_general(&s, &adj, params, file)?,
+            "the lips' front edges",
+        )
+    };
+
     let ring_edges: BTreeSet<Edge> = contour
         .upper
         .windows(2)
@@ -685,14 +743,19 @@ pub fn prepare(
     }
     surf.quad_lines.clear();
     surf.notes.clear();
+    // the rig's arrays on the refined head's vertices (a new vertex: its parents' mean)
     let mut jaw_weight: Vec<f64> = match &rig.jaw_weight {
-        Some(w) => old_of.iter().map(|&o| w[o as usize]).collect(),
+        Some(w) => {
+            let w = refined.extend_scalar(w);
+            old_of.iter().map(|&o| w[o as usize]).collect()
+        }
         None => vec![0.0; old_of.len()],
     };
     let targets: BTreeMap<String, Vec<[f64; 3]>> = rig
         .targets
         .iter()
         .map(|(k, t)| {
+            let t = refined.extend(t);
             (
                 k.clone(),
                 old_of
@@ -746,10 +809,23 @@ pub fn prepare(
             });
         }
     }
+    if !refined.parents.is_empty() {
+        notes.insert(
+            0,
+            format!(
+                "the head's {} faces are not all quads: each face of n corners split into n quads \
+                 ({} quads, {} vertices of which {} added: edge midpoints and face centres)",
+                head.faces.len(),
+                s.quads.len(),
+                s.vertices.len(),
+                refined.parents.len()
+            ),
+        );
+    }
     notes.insert(
-        0,
+        usize::from(!refined.parents.is_empty()),
         format!(
-            "inner lip contour: the closed edge loop with the smallest opening ({:.2} mm) of {} candidates; \
+            "inner lip contour: {how} with the smallest opening ({:.2} mm) of {} candidates; \
              upper lip {} edges, lower lip {} edges, corners {:.1} mm apart; contour {} the surface",
             1e3 * contour.opening,
             contour.candidates,
@@ -764,7 +840,7 @@ pub fn prepare(
          {:.0} mm below and {:.0} mm above the mouth centre and {:.0} mm behind the lips' front",
         surf.quads.len(),
         surf.vertices.len(),
-        head.quads.len(),
+        s.quads.len(),
         1e3 * params.half_width,
         1e3 * params.below,
         1e3 * params.above,
@@ -801,9 +877,9 @@ pub fn prepare(
     })
 }
 
-/// A head is one piece: every quad reaches every other through shared vertices (separate
+/// A head is one piece: every face reaches every other through shared vertices (separate
 /// eyes, teeth or a second head would be taken for skin).
-fn check_one_piece(s: &QuadSurface, file: &str) -> Result<()> {
+fn check_one_piece(s: &PolySurface, file: &str) -> Result<()> {
     let nv = s.vertices.len();
     let mut parent: Vec<u32> = (0..nv as u32).collect();
     fn find(p: &mut [u32], mut x: u32) -> u32 {
@@ -813,17 +889,17 @@ fn check_one_piece(s: &QuadSurface, file: &str) -> Result<()> {
         }
         x
     }
-    for q in &s.quads {
-        for &v in &q[1..] {
-            let (a, b) = (find(&mut parent, q[0]), find(&mut parent, v));
+    for f in &s.faces {
+        for &v in &f[1..] {
+            let (a, b) = (find(&mut parent, f[0]), find(&mut parent, v));
             if a != b {
                 parent[a.max(b) as usize] = a.min(b);
             }
         }
     }
     let mut sizes: BTreeMap<u32, usize> = BTreeMap::new();
-    for q in &s.quads {
-        *sizes.entry(find(&mut parent, q[0])).or_default() += 1;
+    for f in &s.faces {
+        *sizes.entry(find(&mut parent, f[0])).or_default() += 1;
     }
     if sizes.len() > 1 {
         let mut counts: Vec<usize> = sizes.values().copied().collect();
@@ -833,7 +909,7 @@ fn check_one_piece(s: &QuadSurface, file: &str) -> Result<()> {
             file,
             Location::None,
             format!(
-                "the mesh has {} separate pieces (the largest of {:?} quads): give the head's skin alone",
+                "the mesh has {} separate pieces (the largest of {:?} faces): give the head's skin alone",
                 sizes.len(),
                 counts
             ),
@@ -842,27 +918,35 @@ fn check_one_piece(s: &QuadSurface, file: &str) -> Result<()> {
     Ok(())
 }
 
-/// The quads' normals agree: two quads that share an edge run along it in opposite
+/// The faces' normals agree: two faces that share an edge run along it in opposite
 /// directions (else one of them faces inward).
-fn check_orientation(s: &QuadSurface, file: &str) -> Result<()> {
+fn check_orientation(s: &PolySurface, file: &str) -> Result<()> {
+    let name = |f: usize| match s.face_lines.get(f) {
+        Some(l) => format!("line {l}"),
+        None => format!("face {f}"),
+    };
     let mut seen: BTreeMap<(u32, u32), usize> = BTreeMap::new();
-    for (qi, q) in s.quads.iter().enumerate() {
-        for i in 0..4 {
-            let (a, b) = (q[i], q[(i + 1) % 4]);
+    for (fi, f) in s.faces.iter().enumerate() {
+        for i in 0..f.len() {
+            let (a, b) = (f[i], f[(i + 1) % f.len()]);
             if let Some(&other) = seen.get(&(a, b)) {
+                let at = match s.face_lines.get(fi) {
+                    Some(&l) => Location::LineField(l, format!("face {fi}")),
+                    None => Location::Field(format!("face {fi}")),
+                };
                 return Err(Error::input(
                     file,
-                    s.quad_location(qi),
+                    at,
                     format!(
-                        "the quad at {} runs along the edge from vertex {} to {} in the same direction as the quad at {}: their normals disagree (make the normals consistent)",
-                        s.quad_name(qi),
+                        "the face at {} runs along the edge from vertex {} to {} in the same direction as the face at {}: their normals disagree (make the normals consistent)",
+                        name(fi),
                         a + 1,
                         b + 1,
-                        s.quad_name(other)
+                        name(other)
                     ),
                 ));
             }
-            seen.insert((a, b), qi);
+            seen.insert((a, b), fi);
         }
     }
     Ok(())
@@ -1004,7 +1088,7 @@ mod tests {
             ..Default::default()
         };
         let src = prepare(
-            &head,
+            &PolySurface::from_quads(&head),
             &rig,
             frame_mm(),
             &PrepareParams::default(),
@@ -1084,7 +1168,7 @@ mod tests {
             uv.extend([[0.0, 0.0]; 4]);
         }
         let e = prepare(
-            &two,
+            &PolySurface::from_quads(&two),
             &FaceRig::default(),
             frame,
             &PrepareParams::default(),
@@ -1100,7 +1184,7 @@ mod tests {
         let mut flipped = head.clone();
         flipped.quads[10].reverse();
         let e = prepare(
-            &flipped,
+            &PolySurface::from_quads(&flipped),
             &FaceRig::default(),
             frame,
             &PrepareParams::default(),
@@ -1122,7 +1206,7 @@ mod tests {
             v[1] *= 20.0;
         }
         let e = prepare(
-            &head,
+            &PolySurface::from_quads(&head),
             &FaceRig::default(),
             frame_mm(),
             &PrepareParams::default(),
@@ -1140,7 +1224,7 @@ mod tests {
             ..Default::default()
         };
         let e = prepare(
-            &synthetic_head(),
+            &PolySurface::from_quads(&synthetic_head()),
             &rig,
             frame_mm(),
             &PrepareParams::default(),
@@ -1152,5 +1236,182 @@ mod tests {
             e.contains("rig.jaw_weight") && e.contains("3 values"),
             "{e}"
         );
+    }
+
+    /// The synthetic head with every quad split into two triangles (corners 0 1 2 and
+    /// 0 2 3): no vertex of the refined mesh has the four quads the loop finder needs along
+    /// the lips, so the contour comes from the general finder.
+    fn triangulated(head: &QuadSurface) -> PolySurface {
+        let mut p = PolySurface::from_quads(head);
+        p.faces = head
+            .quads
+            .iter()
+            .flat_map(|q| [vec![q[0], q[1], q[2]], vec![q[0], q[2], q[3]]])
+            .collect();
+        p.group_of_face = vec![0; p.faces.len()];
+        p
+    }
+
+    #[test]
+    fn a_triangulated_head_gives_the_lips_of_the_quad_head() {
+        let head = synthetic_head();
+        let quads = prepare(
+            &PolySurface::from_quads(&head),
+            &FaceRig::default(),
+            frame_mm(),
+            &PrepareParams::default(),
+            "quads",
+        )
+        .unwrap();
+        let tri = triangulated(&head);
+        let src = prepare(
+            &tri,
+            &FaceRig::default(),
+            frame_mm(),
+            &PrepareParams::default(),
+            "tri",
+        )
+        .unwrap();
+        let d = &src.data;
+        assert!(d.notes[0].contains("not all quads"), "{:?}", d.notes);
+        assert!(
+            d.notes[1].contains("the lips' front edges"),
+            "{:?}",
+            d.notes
+        );
+        let p = |s: &FaceSource, v: u32| s.surface.vertices[v as usize];
+        // the corners where the quad head's are: x = -+25 mm, y = 0
+        for (a, b) in [
+            (d.upper_contour[0], quads.data.upper_contour[0]),
+            (
+                *d.upper_contour.last().unwrap(),
+                *quads.data.upper_contour.last().unwrap(),
+            ),
+        ] {
+            let (a, b) = (p(&src, a), p(&quads, b));
+            assert!(
+                (a[0] - b[0]).abs() < 1e-12 && a[1].abs() < 1e-12,
+                "{a:?} {b:?}"
+            );
+        }
+        assert_eq!(d.upper_contour[0], d.lower_contour[0]);
+        assert_eq!(d.upper_contour.last(), d.lower_contour.last());
+        // each line runs left to right on its own lip, on the lips' ring (z = 0) or the
+        // tube's first ring behind it (z = -3 mm: there the lip faces the other lip)
+        for (line, sign) in [(&d.upper_contour, 1.0), (&d.lower_contour, -1.0)] {
+            assert!(line.windows(2).all(|w| p(&src, w[1])[0] > p(&src, w[0])[0]));
+            for &v in &line[1..line.len() - 1] {
+                let x = p(&src, v);
+                assert!(sign * x[1] > 0.0, "{x:?}");
+                assert!(x[2] >= -0.003 - 1e-12, "{x:?}");
+            }
+        }
+        // the kept skin is the face and at most the tube's first ring; the head's faces
+        // are the input's triangles, its refined vertices past the input's
+        assert!(src.surface.vertices.iter().all(|v| v[2] >= -0.003 - 1e-12));
+        let h = src.head.as_ref().unwrap();
+        assert_eq!(h.surface.faces, tri.faces);
+        assert_eq!(h.jaw_weight.len(), tri.vertices.len());
+        let refined = h.surface.to_quads();
+        assert_eq!(refined.surface.quads.len(), 3 * tri.faces.len());
+        assert!(d
+            .source_vertex
+            .iter()
+            .all(|&v| (v as usize) < refined.surface.vertices.len()));
+        // written and read back, the same face and head
+        let dir = std::env::temp_dir().join(format!("sticky-lips-tri-face-{}", std::process::id()));
+        super::super::write_dir(&dir, &src).unwrap();
+        let back = super::super::read_dir(&dir).unwrap();
+        std::fs::remove_dir_all(&dir).ok();
+        assert_eq!(back.data, src.data);
+        assert_eq!(back.head.as_ref().unwrap().surface.faces, tri.faces);
+    }
+
+    #[test]
+    fn lips_named_by_the_rig_give_the_contour_found() {
+        let head = PolySurface::from_quads(&synthetic_head());
+        let found = prepare(
+            &head,
+            &FaceRig::default(),
+            frame_mm(),
+            &PrepareParams::default(),
+            "found",
+        )
+        .unwrap();
+        let d = &found.data;
+        // the found contour's input vertices, shuffled, corners left out of the upper lip
+        let input =
+            |l: &[u32]| -> Vec<u32> { l.iter().map(|&v| d.source_vertex[v as usize]).collect() };
+        let mut upper = input(&d.upper_contour[1..d.upper_contour.len() - 1]);
+        upper.reverse();
+        let mut lower = input(&d.lower_contour);
+        lower.rotate_left(5);
+        let rig = FaceRig {
+            upper_lip: Some(upper.clone()),
+            lower_lip: Some(lower.clone()),
+            ..Default::default()
+        };
+        let named = prepare(&head, &rig, frame_mm(), &PrepareParams::default(), "named").unwrap();
+        assert_eq!(named.data.upper_contour, d.upper_contour);
+        assert_eq!(named.data.lower_contour, d.lower_contour);
+        assert_eq!(named.surface, found.surface);
+        assert!(named.data.notes[0].contains("the rig's upper_lip and lower_lip"));
+        // swapped, one missing, out of range: refused naming the field
+        let bad = |u: Option<Vec<u32>>, l: Option<Vec<u32>>| {
+            let rig = FaceRig {
+                upper_lip: u,
+                lower_lip: l,
+                ..Default::default()
+            };
+            prepare(&head, &rig, frame_mm(), &PrepareParams::default(), "h.obj")
+                .unwrap_err()
+                .to_string()
+        };
+        let e = bad(Some(lower.clone()), Some(upper.clone()));
+        assert!(e.contains("rig.upper_lip") && e.contains("below"), "{e}");
+        let e = bad(Some(upper.clone()), None);
+        assert!(e.contains("rig.lower_lip") && e.contains("both"), "{e}");
+        let e = bad(Some(vec![1_000_000]), Some(lower));
+        assert!(
+            e.contains("rig.upper_lip") && e.contains("out of range"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn the_axes_are_detected_from_the_lips_and_the_nose() {
+        use super::super::lips::detect_axes;
+        let mut head = synthetic_head();
+        let params = PrepareParams::default();
+        // the face curved back like a head's (ring k of the flange out from the lips 2 k^2
+        // mm behind them), so that the mouth lies in front of the head's centre
+        for (v, p) in head.vertices.iter_mut().enumerate() {
+            let ring = v / 24;
+            if ring <= 8 {
+                p[2] -= 2.0 * ((8 - ring) as f64).powi(2);
+            }
+        }
+        // without a nose up cannot be told from down
+        let e = detect_axes(&PolySurface::from_quads(&head), 1e-3, &params, "flat.obj")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("flat.obj") && e.contains("up from down"), "{e}");
+        // a nose: the flange vertex 16.6 mm above the mouth's middle, 10 mm forward
+        let nose = (0..head.vertices.len())
+            .find(|&v| {
+                let p = head.vertices[v];
+                p[0].abs() < 1e-9 && (p[1] - 16.6).abs() < 1e-9
+            })
+            .unwrap();
+        head.vertices[nose][2] = 10.0;
+        // in Blender's axes: z up, -y forward
+        let mut zup = head.clone();
+        for v in zup.vertices.iter_mut() {
+            *v = [v[0], -v[2], v[1]];
+        }
+        let d = detect_axes(&PolySurface::from_quads(&zup), 1e-3, &params, "zup.obj").unwrap();
+        assert_eq!(d.up, [0.0, 0.0, 1.0]);
+        assert_eq!(d.forward, [0.0, -1.0, 0.0]);
+        assert!(d.note.contains("up +Z, forward -Y"), "{}", d.note);
     }
 }
