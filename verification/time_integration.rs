@@ -521,3 +521,125 @@ fn linear_stiffness_is_the_derivative_of_the_element_forces() {
         );
     }
 }
+
+/// The Lanczos estimate of `lambda_max` (the stability analysis's `omega_max^2`) against a
+/// dense eigensolver, and its stopping rule as documented: it stops at the first iteration
+/// that is the third in a row whose Ritz value changed by at most `tol` of itself (the
+/// value before the first is 0), and returns that value with the iteration count. The
+/// sequence of Ritz values comes from the same function stopped after `k` iterations
+/// (`max_iter = k`, `tol = 0`). cargo-mutants found the stopping rule unchecked (11 mutants
+/// of `largest_eigenvalue` missed).
+#[test]
+fn lanczos_stops_at_the_third_converged_ritz_value() {
+    use sticky_lips::tled::stability::largest_eigenvalue;
+    let mesh = distorted_block([0.0; 3], [0.03, 0.02, 0.025], [3, 2, 3], 0.2, 17);
+    let mut bc = BoundaryConditions::default();
+    bc.fixed.push(fix_all(&mesh.node_sets["z_min"]));
+    let time = TimeSettings {
+        dt: 1e-5,
+        total_time: 1e-3,
+        output_every: 100,
+    };
+    let p = problem(mesh, GradientVariant::MeanGradient, bc, time, 0.0);
+    let d = Discretisation::new(&p);
+    let tol = 1e-10;
+    let (lmax, iterations) = largest_eigenvalue(&d, 300, tol);
+    assert!(iterations < 300, "did not converge");
+    // the dense largest eigenvalue of M^-1/2 K M^-1/2 on the free DOFs
+    let n = 3 * d.num_nodes;
+    let free: Vec<usize> = (0..n).filter(|&k| !d.constraints.constrained[k]).collect();
+    let m = free.len();
+    let mut kmat = nalgebra::DMatrix::<f64>::zeros(m, m);
+    let (mut e, mut col) = (vec![0.0; n], vec![0.0; n]);
+    for (j, &kj) in free.iter().enumerate() {
+        e[kj] = 1.0;
+        linear_stiffness_times(&d, &e, &mut col);
+        e[kj] = 0.0;
+        for (i, &ki) in free.iter().enumerate() {
+            kmat[(i, j)] = col[ki] / (d.mass[ki / 3] * d.mass[kj / 3]).sqrt();
+        }
+    }
+    let kmat = 0.5 * (&kmat + kmat.transpose());
+    let dense = kmat
+        .symmetric_eigen()
+        .eigenvalues
+        .iter()
+        .cloned()
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!(
+        (lmax - dense).abs() <= 1e-9 * dense,
+        "Lanczos {lmax} vs dense {dense}"
+    );
+    // the stopping rule, from the Ritz values of iterations 1 ..= iterations
+    let ritz: Vec<f64> = (1..=iterations)
+        .map(|k| {
+            let (r, it) = largest_eigenvalue(&d, k, 0.0);
+            assert_eq!(it, k, "stopped early without a tolerance");
+            r
+        })
+        .collect();
+    let converged = |k: usize| {
+        let before = if k == 0 { 0.0 } else { ritz[k - 1] };
+        (ritz[k] - before).abs() <= tol * ritz[k].abs()
+    };
+    let want = (2..ritz.len())
+        .find(|&k| converged(k) && converged(k - 1) && converged(k - 2))
+        .map(|k| k + 1)
+        .expect("three converged Ritz values in a row");
+    assert_eq!(iterations, want);
+    assert_eq!(lmax, ritz[iterations - 1]);
+    let total = (0..iterations).filter(|&k| converged(k)).count();
+    println!("{iterations} iterations, {total} converged Ritz values, lambda_max {lmax:.6e}");
+}
+
+/// When the Krylov space is exhausted the iteration stops at the breakdown with the exact
+/// largest eigenvalue: a single hexahedron with seven corners fixed leaves a 3 x 3 problem
+/// whose eigenvalues are the one-point rule's `(lambda + 2 mu) |g|^2 V` along the free
+/// corner's gradient `g` and `mu |g|^2 V` twice across it (each with the same hourglass
+/// term added), so a start vector spans two of them and the iteration breaks down after
+/// two, as many as the distinct eigenvalues.
+#[test]
+fn lanczos_stops_when_the_krylov_space_is_exhausted() {
+    use sticky_lips::tled::stability::largest_eigenvalue;
+    let mut mesh = block([0.0; 3], [0.01, 0.012, 0.009], [1, 1, 1]);
+    // every corner moved by a different 0.5-1.5 mm: not a box
+    for (i, x) in mesh.nodes.iter_mut().enumerate() {
+        for (k, c) in x.iter_mut().enumerate() {
+            *c += 1e-3 * (0.5 + ((7 * i + 3 * k) % 5) as f64 / 4.0);
+        }
+    }
+    let mut bc = BoundaryConditions::default();
+    bc.fixed.push(fix_all(&(0..7).collect::<Vec<u32>>()));
+    let time = TimeSettings {
+        dt: 1e-5,
+        total_time: 1e-3,
+        output_every: 100,
+    };
+    let p = problem(mesh, GradientVariant::MeanGradient, bc, time, 0.0);
+    let d = Discretisation::new(&p);
+    let (lmax, iterations) = largest_eigenvalue(&d, 300, 0.0);
+    let n = 3 * d.num_nodes;
+    let free: Vec<usize> = (0..n).filter(|&k| !d.constraints.constrained[k]).collect();
+    assert_eq!(free.len(), 3);
+    let mut kmat = nalgebra::DMatrix::<f64>::zeros(3, 3);
+    let (mut e, mut col) = (vec![0.0; n], vec![0.0; n]);
+    for (j, &kj) in free.iter().enumerate() {
+        e[kj] = 1.0;
+        linear_stiffness_times(&d, &e, &mut col);
+        e[kj] = 0.0;
+        for (i, &ki) in free.iter().enumerate() {
+            kmat[(i, j)] = col[ki] / (d.mass[ki / 3] * d.mass[kj / 3]).sqrt();
+        }
+    }
+    let kmat = 0.5 * (&kmat + kmat.transpose());
+    let mut eig: Vec<f64> = kmat.symmetric_eigen().eigenvalues.iter().cloned().collect();
+    eig.sort_by(f64::total_cmp);
+    let dense = eig[2];
+    assert!((lmax - dense).abs() <= 1e-12 * dense, "{lmax} vs {dense}");
+    let distinct = 1 + eig
+        .windows(2)
+        .filter(|w| w[1] - w[0] > 1e-9 * dense)
+        .count();
+    assert_eq!(distinct, 2, "{eig:?}");
+    assert_eq!(iterations, distinct);
+}

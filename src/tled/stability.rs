@@ -258,3 +258,65 @@ pub fn check_time_step(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dense_max(a: &[f64], b: &[f64]) -> f64 {
+        let m = a.len();
+        let t = nalgebra::DMatrix::<f64>::from_fn(m, m, |i, j| {
+            if i == j {
+                a[i]
+            } else if i + 1 == j {
+                b[i]
+            } else if j + 1 == i {
+                b[j]
+            } else {
+                0.0
+            }
+        });
+        t.symmetric_eigenvalues()
+            .iter()
+            .cloned()
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    /// The bisection's answer is the dense solver's largest eigenvalue, for random symmetric
+    /// tridiagonal matrices of every size up to 12 (off-diagonals of both signs, some zero),
+    /// the 1-D Laplacian (`2 + 2 cos(pi / (m + 1))`) and a zero pivot (`[[0, 1], [1, 0]]`, whose
+    /// Sturm sequence meets an exact zero at the bisection's first midpoint).
+    #[test]
+    fn tridiagonal_max_eigenvalue_is_the_dense_solvers_largest() {
+        let mut rng = crate::mesh::generate::SplitMix64(11);
+        for m in 1..=12 {
+            for case in 0..20 {
+                let a: Vec<f64> = (0..m).map(|_| 10.0 * rng.symmetric()).collect();
+                let b: Vec<f64> = (0..m - 1)
+                    .map(|i| {
+                        if (i + case) % 7 == 3 {
+                            0.0
+                        } else {
+                            3.0 * rng.symmetric()
+                        }
+                    })
+                    .collect();
+                let (got, want) = (tridiagonal_max_eigenvalue(&a, &b), dense_max(&a, &b));
+                let scale = a.iter().chain(&b).fold(1.0f64, |s, x| s.max(x.abs()));
+                assert!(
+                    (got - want).abs() <= 1e-13 * scale,
+                    "m {m}: {got} vs {want}"
+                );
+            }
+        }
+        for m in [1usize, 2, 5, 40] {
+            let a = vec![2.0; m];
+            let b = vec![-1.0; m - 1];
+            let want = 2.0 + 2.0 * (std::f64::consts::PI / (m as f64 + 1.0)).cos();
+            let got = tridiagonal_max_eigenvalue(&a, &b);
+            assert!((got - want).abs() <= 1e-14 * want, "m {m}: {got} vs {want}");
+        }
+        assert_eq!(tridiagonal_max_eigenvalue(&[0.0, 0.0], &[1.0]), 1.0);
+        assert_eq!(tridiagonal_max_eigenvalue(&[5.0], &[]), 5.0);
+    }
+}

@@ -765,19 +765,25 @@ pub fn prepare(
             )
         })
         .collect();
+    let width = dist(
+        surf.vertices[upper[0] as usize],
+        surf.vertices[*upper.last().unwrap() as usize],
+    );
     let hinge_point = rig.hinge_point.map(|p| frame.point(p)).unwrap_or_else(|| {
-        notes.push("no hinge given: 85 mm behind and 30 mm above the mouth centre (the procedural mouth's)".into());
-        [centre[0], centre[1] + 0.030, centre[2] - 0.085]
+        let h = estimated_hinge(centre, width);
+        notes.push(format!(
+            "no hinge given: estimated from the mouth, {:.1} mm above and {:.1} mm behind its centre \
+             ({HINGE_ABOVE} and {HINGE_BEHIND} mouth widths, as on the MakeHuman rig)",
+            1e3 * (h[1] - centre[1]),
+            1e3 * (centre[2] - h[2])
+        ));
+        h
     });
     let hinge_axis = rig
         .hinge_axis
         .map(|a| unit(frame.vector(a)))
         .unwrap_or([1.0, 0.0, 0.0]);
     // muscles from the mouth's landmarks
-    let width = dist(
-        surf.vertices[upper[0] as usize],
-        surf.vertices[*upper.last().unwrap() as usize],
-    );
     let scale = width / 0.05;
     // without the rig's weights, the jaw's share of each vertex's motion from where it is
     let estimate = |p: &[f64; 3]| estimated_jaw_weight(p, centre, width, hinge_point);
@@ -950,6 +956,24 @@ fn check_orientation(s: &PolySurface, file: &str) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The jaw's hinge where the rig gives none, in mouth widths (corner to corner) above and
+/// behind the mouth centre: the MakeHuman hm08 rig's jaw joint sits 27.5 mm above and
+/// 91.2 mm behind the centre of its 48.8 mm wide mouth (`assets/makehuman/face.json`:
+/// `hinge_point`, `mouth_center`, the contours' corners), and a head scaled up or down
+/// scales both.
+pub const HINGE_ABOVE: f64 = 0.564;
+pub const HINGE_BEHIND: f64 = 1.868;
+
+/// The estimated hinge point (metres, model frame) of a mouth centred at `centre`, `width`
+/// wide ([`HINGE_ABOVE`], [`HINGE_BEHIND`]).
+pub fn estimated_hinge(centre: [f64; 3], width: f64) -> [f64; 3] {
+    [
+        centre[0],
+        centre[1] + HINGE_ABOVE * width,
+        centre[2] - HINGE_BEHIND * width,
+    ]
 }
 
 /// The estimated jaw weight's largest value, and the band below the mouth centre (in mouth
@@ -1413,5 +1437,22 @@ mod tests {
         assert_eq!(d.up, [0.0, 0.0, 1.0]);
         assert_eq!(d.forward, [0.0, -1.0, 0.0]);
         assert!(d.note.contains("up +Z, forward -Y"), "{}", d.note);
+    }
+
+    #[test]
+    fn the_estimated_hinge_is_the_makehuman_rigs_for_its_mouth() {
+        let f = super::super::makehuman().unwrap();
+        let d = &f.data;
+        let p = |v: u32| f.surface.vertices[v as usize];
+        let width = dist(p(d.upper_contour[0]), p(*d.upper_contour.last().unwrap()));
+        let h = estimated_hinge(d.mouth_center, width);
+        // the constants are rounded to 3 decimals of a mouth width: 0.05 mm here
+        for k in 0..3 {
+            assert!(
+                (h[k] - d.hinge_point[k]).abs() < 5e-5,
+                "{h:?} {:?}",
+                d.hinge_point
+            );
+        }
     }
 }
