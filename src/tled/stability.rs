@@ -197,8 +197,11 @@ fn tridiagonal_max_eigenvalue(a: &[f64], b: &[f64]) -> f64 {
         for i in 0..m {
             let bb = if i > 0 { b[i - 1] * b[i - 1] } else { 0.0 };
             q = a[i] - x - if i > 0 { bb / q } else { 0.0 };
+            // an exact zero pivot stands for the limit from above (not counted, the next
+            // pivot towards -infinity): the least positive normal does that, and keeps
+            // `bb / q` a number (0 / 0 where b vanishes)
             if q == 0.0 {
-                q = f64::EPSILON * (x.abs() + 1.0);
+                q = f64::MIN_POSITIVE;
             }
             if q < 0.0 {
                 c += 1;
