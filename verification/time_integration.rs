@@ -643,3 +643,72 @@ fn lanczos_stops_when_the_krylov_space_is_exhausted() {
     assert_eq!(distinct, 2, "{eig:?}");
     assert_eq!(iterations, distinct);
 }
+
+/// The report's element estimate is the smallest of the per-element estimates and names the
+/// first element that has it (equal cubes: element 0; a distorted block: its argmin), and
+/// `check_time_step` accepts a time step equal to the critical one and refuses the next
+/// larger float ("above the critical step"). cargo-mutants found both unchecked.
+#[test]
+fn the_report_names_the_smallest_element_estimate_and_the_limit_is_inclusive() {
+    use sticky_lips::tled::stability::element_estimates;
+    // three copies of one cube on their own nodes at the same place: their estimates are
+    // the same computation, equal bit for bit
+    let time = TimeSettings {
+        dt: 1e-5,
+        total_time: 1e-3,
+        output_every: 100,
+    };
+    let mut cubes = block([0.0; 3], [0.01; 3], [1, 1, 1]);
+    for copy in 1..3u32 {
+        let e = cubes.elements[0].map(|v| v + 8 * copy);
+        cubes.nodes.extend_from_within(0..8);
+        cubes.elements.push(e);
+    }
+    cubes.node_sets.clear();
+    let uniform = problem(
+        cubes,
+        GradientVariant::MeanGradient,
+        BoundaryConditions::default(),
+        time,
+        0.0,
+    );
+    let rep = analyse(&uniform, &Discretisation::new(&uniform));
+    let est = element_estimates(&uniform);
+    assert!(
+        est.iter().all(|&e| e == est[0]),
+        "the cubes' estimates differ: {est:?}"
+    );
+    assert_eq!(rep.limiting_element, 0);
+    assert_eq!(rep.element_estimate, est[0]);
+    let mesh = distorted_block([0.0; 3], [0.03, 0.02, 0.025], [3, 2, 3], 0.2, 17);
+    let time = TimeSettings {
+        dt: 1e-5,
+        total_time: 1e-3,
+        output_every: 100,
+    };
+    let p = problem(
+        mesh,
+        GradientVariant::MeanGradient,
+        BoundaryConditions::default(),
+        time,
+        0.0,
+    );
+    let rep = analyse(&p, &Discretisation::new(&p));
+    let est = element_estimates(&p);
+    let min = est.iter().cloned().fold(f64::INFINITY, f64::min);
+    assert_eq!(rep.element_estimate, min);
+    assert_eq!(
+        rep.limiting_element,
+        est.iter().position(|&e| e == min).unwrap()
+    );
+    assert!(
+        rep.limiting_element > 0,
+        "the test should not pass with element 0 by default"
+    );
+    // the limit itself is allowed; the next float above it is not
+    let mut at = p.clone();
+    at.time.dt = rep.critical_time_step;
+    assert!(check_time_step(&at, &rep, false).is_ok());
+    at.time.dt = f64::from_bits(rep.critical_time_step.to_bits() + 1);
+    assert!(check_time_step(&at, &rep, false).is_err());
+}
