@@ -858,3 +858,19 @@ mod avx {
         }
     }
 }
+
+#[cfg(test)]
+mod layout_tests {
+    use super::*;
+
+    /// A block's constants are dense: `D` (8 x 3 rows), then `gamma` (8 x 4), then `W`, `k`,
+    /// `mu`, `K`, and nothing after them (a longer stride would only waste memory, which no
+    /// result shows: cargo-mutants found the sum unchecked).
+    #[test]
+    fn a_blocks_constants_are_its_named_rows_and_nothing_else() {
+        assert_eq!(ROW_GAMMA, 8 * 3);
+        assert_eq!(ROW_W, ROW_GAMMA + 8 * 4);
+        assert_eq!([ROW_K, ROW_MU, ROW_BULK], [ROW_W + 1, ROW_W + 2, ROW_W + 3]);
+        assert_eq!(BLOCK_CONSTANTS, ROW_BULK + 1);
+    }
+}
