@@ -258,11 +258,30 @@ mod tests {
         let u: Vec<[f64; 3]> = (0..8)
             .map(|a| [0.0, 0.0, -(1.0 + NATURAL[a][2]) / 2.0])
             .collect();
+        el.build_blocks();
         let mut out = vec![[[0.0; 3]; 8]];
         assert_eq!(element_forces_scalar(&el, &u, &mut out), Some(0));
+        // the lane kernels too (their quick all-lanes test and the per-lane recheck)
+        assert_eq!(element_forces(&el, &u, &mut out), Some(0));
+        assert_eq!(element_forces_portable(&el, &u, &mut out), Some(0));
         // half flattened: J = 1/2, valid
         let half: Vec<[f64; 3]> = u.iter().map(|v| [0.0, 0.0, v[2] / 2.0]).collect();
         assert_eq!(element_forces_scalar(&el, &half, &mut out), None);
+        assert_eq!(element_forces(&el, &half, &mut out), None);
+        assert_eq!(element_forces_portable(&el, &half, &mut out), None);
+        // eight copies: a whole block of lanes with J = 0 (no padding lane with J = 1)
+        let mut full = el.clone();
+        full.conn = vec![el.conn[0]; 8];
+        full.dhdx = vec![el.dhdx[0]; 8];
+        full.weight = vec![el.weight[0]; 8];
+        full.gamma = vec![el.gamma[0]; 8];
+        full.hg_k = vec![el.hg_k[0]; 8];
+        full.mu = vec![el.mu[0]; 8];
+        full.bulk = vec![el.bulk[0]; 8];
+        full.build_blocks();
+        let mut out8 = vec![[[0.0; 3]; 8]; 8];
+        assert_eq!(element_forces(&full, &u, &mut out8), Some(0));
+        assert_eq!(element_forces_portable(&full, &u, &mut out8), Some(0));
         let none = ElementArrays::<f64> {
             conn: vec![],
             ..el.clone()
