@@ -282,6 +282,13 @@ mod tests {
         let mut out8 = vec![[[0.0; 3]; 8]; 8];
         assert_eq!(element_forces(&full, &u, &mut out8), Some(0));
         assert_eq!(element_forces_portable(&full, &u, &mut out8), Some(0));
+        // and a whole block turned inside out (J = -1/2 in every lane)
+        let inverted: Vec<[f64; 3]> = u.iter().map(|v| [0.0, 0.0, 1.5 * v[2]]).collect();
+        assert_eq!(element_forces(&full, &inverted, &mut out8), Some(0));
+        assert_eq!(
+            element_forces_portable(&full, &inverted, &mut out8),
+            Some(0)
+        );
         let none = ElementArrays::<f64> {
             conn: vec![],
             ..el.clone()
