@@ -312,64 +312,13 @@ pub struct Contour {
     pub candidates: usize,
 }
 
-/// Pinch distance of every vertex (m; infinity where no vertex lies within `radius`).
+/// Pinch distance of every vertex (m; infinity where no vertex lies within `radius`): the
+/// gap of [`super::lips::partners`].
 fn pinch_distances(s: &QuadSurface, adj: &Adjacency, radius: f64) -> Vec<f64> {
-    let nv = s.vertices.len();
-    let cell = radius;
-    let key = |p: [f64; 3]| -> (i64, i64, i64) {
-        (
-            (p[0] / cell).floor() as i64,
-            (p[1] / cell).floor() as i64,
-            (p[2] / cell).floor() as i64,
-        )
-    };
-    let mut grid: BTreeMap<(i64, i64, i64), Vec<u32>> = BTreeMap::new();
-    for (v, p) in s.vertices.iter().enumerate() {
-        if !adj.vertex_quads[v].is_empty() {
-            grid.entry(key(*p)).or_default().push(v as u32);
-        }
-    }
-    let neighbours: Vec<Vec<u32>> = (0..nv as u32).map(|v| adj.neighbours(s, v)).collect();
-    let mut out = vec![f64::INFINITY; nv];
-    let mut mark = vec![usize::MAX; nv];
-    for v in 0..nv {
-        if adj.vertex_quads[v].is_empty() {
-            continue;
-        }
-        // vertices within PINCH_HOPS edges
-        mark[v] = v;
-        let mut front = vec![v as u32];
-        for _ in 0..PINCH_HOPS {
-            let mut next = Vec::new();
-            for &u in &front {
-                for &w in &neighbours[u as usize] {
-                    if mark[w as usize] != v {
-                        mark[w as usize] = v;
-                        next.push(w);
-                    }
-                }
-            }
-            front = next;
-        }
-        let p = s.vertices[v];
-        let (i, j, k) = key(p);
-        let mut best = f64::INFINITY;
-        for di in -1..=1 {
-            for dj in -1..=1 {
-                for dk in -1..=1 {
-                    if let Some(list) = grid.get(&(i + di, j + dj, k + dk)) {
-                        for &w in list {
-                            if mark[w as usize] != v {
-                                best = best.min(dist(p, s.vertices[w as usize]));
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        out[v] = if best <= radius { best } else { f64::INFINITY };
-    }
-    out
+    super::lips::partners(s, adj, radius)
+        .into_iter()
+        .map(|p| p.map_or(f64::INFINITY, |(d, _)| d))
+        .collect()
 }
 
 /// Splits a closed loop at its vertices of smallest and largest `x` into the upper and
