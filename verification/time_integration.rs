@@ -348,8 +348,9 @@ fn stability_limit() {
     );
 }
 
-/// Smallest circular frequency `omega_1` (rad/s) of the linearised, constrained model (dense eigen).
-fn lowest_frequency(d: &Discretisation) -> f64 {
+/// `M^-1/2 K M^-1/2` on the free DOFs as a dense symmetric matrix (columns from
+/// `linear_stiffness_times`, symmetrised).
+fn dense_free_operator(d: &Discretisation) -> nalgebra::DMatrix<f64> {
     let n = 3 * d.num_nodes;
     let free: Vec<usize> = (0..n).filter(|&k| !d.constraints.constrained[k]).collect();
     let m = free.len();
@@ -365,6 +366,12 @@ fn lowest_frequency(d: &Discretisation) -> f64 {
         }
     }
     let kmat = 0.5 * (&kmat + kmat.transpose());
+    kmat
+}
+
+/// Smallest circular frequency `omega_1` (rad/s) of the linearised, constrained model (dense eigen).
+fn lowest_frequency(d: &Discretisation) -> f64 {
+    let kmat = dense_free_operator(d);
     let lmin = kmat
         .symmetric_eigen()
         .eigenvalues
@@ -546,20 +553,7 @@ fn lanczos_stops_at_the_third_converged_ritz_value() {
     let (lmax, iterations) = largest_eigenvalue(&d, 300, tol);
     assert!(iterations < 300, "did not converge");
     // the dense largest eigenvalue of M^-1/2 K M^-1/2 on the free DOFs
-    let n = 3 * d.num_nodes;
-    let free: Vec<usize> = (0..n).filter(|&k| !d.constraints.constrained[k]).collect();
-    let m = free.len();
-    let mut kmat = nalgebra::DMatrix::<f64>::zeros(m, m);
-    let (mut e, mut col) = (vec![0.0; n], vec![0.0; n]);
-    for (j, &kj) in free.iter().enumerate() {
-        e[kj] = 1.0;
-        linear_stiffness_times(&d, &e, &mut col);
-        e[kj] = 0.0;
-        for (i, &ki) in free.iter().enumerate() {
-            kmat[(i, j)] = col[ki] / (d.mass[ki / 3] * d.mass[kj / 3]).sqrt();
-        }
-    }
-    let kmat = 0.5 * (&kmat + kmat.transpose());
+    let kmat = dense_free_operator(&d);
     let dense = kmat
         .symmetric_eigen()
         .eigenvalues
@@ -618,20 +612,8 @@ fn lanczos_stops_when_the_krylov_space_is_exhausted() {
     let p = problem(mesh, GradientVariant::MeanGradient, bc, time, 0.0);
     let d = Discretisation::new(&p);
     let (lmax, iterations) = largest_eigenvalue(&d, 300, 0.0);
-    let n = 3 * d.num_nodes;
-    let free: Vec<usize> = (0..n).filter(|&k| !d.constraints.constrained[k]).collect();
-    assert_eq!(free.len(), 3);
-    let mut kmat = nalgebra::DMatrix::<f64>::zeros(3, 3);
-    let (mut e, mut col) = (vec![0.0; n], vec![0.0; n]);
-    for (j, &kj) in free.iter().enumerate() {
-        e[kj] = 1.0;
-        linear_stiffness_times(&d, &e, &mut col);
-        e[kj] = 0.0;
-        for (i, &ki) in free.iter().enumerate() {
-            kmat[(i, j)] = col[ki] / (d.mass[ki / 3] * d.mass[kj / 3]).sqrt();
-        }
-    }
-    let kmat = 0.5 * (&kmat + kmat.transpose());
+    let kmat = dense_free_operator(&d);
+    assert_eq!(kmat.nrows(), 3);
     let mut eig: Vec<f64> = kmat.symmetric_eigen().eigenvalues.iter().cloned().collect();
     eig.sort_by(f64::total_cmp);
     let dense = eig[2];
