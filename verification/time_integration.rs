@@ -365,8 +365,7 @@ fn dense_free_operator(d: &Discretisation) -> nalgebra::DMatrix<f64> {
             kmat[(i, j)] = col[ki] / (d.mass[ki / 3] * d.mass[kj / 3]).sqrt();
         }
     }
-    let kmat = 0.5 * (&kmat + kmat.transpose());
-    kmat
+    0.5 * (&kmat + kmat.transpose())
 }
 
 /// Smallest circular frequency `omega_1` (rad/s) of the linearised, constrained model (dense eigen).
