@@ -367,6 +367,91 @@ mod tests {
         lanes_equal_scalar::<f32>();
     }
 
+    /// `u` copied into the last bytes of readable memory, the page after it mapped
+    /// unreadable: a read of even one value past the end of `u` stops the test process with
+    /// SIGSEGV instead of reading a neighbour's bytes unnoticed.
+    #[cfg(target_os = "linux")]
+    struct GuardedNodes {
+        map: *mut u8,
+        len: usize,
+        start: *mut u8,
+    }
+
+    #[cfg(target_os = "linux")]
+    impl GuardedNodes {
+        fn new<T: Real>(u: &[[T; 3]]) -> Self {
+            let bytes = std::mem::size_of_val(u);
+            // SAFETY: plain POSIX calls on a fresh anonymous mapping of our own; `start` is
+            // `bytes` before the guard page, aligned for T (page and node sizes are multiples
+            // of T's size and alignment).
+            unsafe {
+                let page = libc::sysconf(libc::_SC_PAGESIZE) as usize;
+                let data = bytes.div_ceil(page) * page;
+                let len = data + page;
+                let map = libc::mmap(
+                    std::ptr::null_mut(),
+                    len,
+                    libc::PROT_READ | libc::PROT_WRITE,
+                    libc::MAP_PRIVATE | libc::MAP_ANONYMOUS,
+                    -1,
+                    0,
+                );
+                assert!(map != libc::MAP_FAILED, "mmap failed");
+                let map = map as *mut u8;
+                assert_eq!(
+                    libc::mprotect(map.add(data) as *mut libc::c_void, page, libc::PROT_NONE),
+                    0
+                );
+                let start = map.add(data - bytes);
+                std::ptr::copy_nonoverlapping(u.as_ptr() as *const u8, start, bytes);
+                GuardedNodes { map, len, start }
+            }
+        }
+        fn nodes<T: Real>(&self, n: usize) -> &[[T; 3]] {
+            // SAFETY: `new` copied exactly n nodes of T to `start`.
+            unsafe { std::slice::from_raw_parts(self.start as *const [T; 3], n) }
+        }
+    }
+
+    #[cfg(target_os = "linux")]
+    impl Drop for GuardedNodes {
+        fn drop(&mut self) {
+            // SAFETY: the mapping `new` made, no slice of it outlives `self`.
+            unsafe { libc::munmap(self.map as *mut libc::c_void, self.len) };
+        }
+    }
+
+    /// The vector gathers load four values from the start of a node (its x, y, z and the next
+    /// node's x): a block that holds the last node must take the per-lane path. With the
+    /// displacements ending at an unreadable page and the last node in the first and the last
+    /// block, every kernel reads inside `u` and gives the scalar reference's bits.
+    #[cfg(target_os = "linux")]
+    fn lanes_read_only_inside_u<T: SimdReal>() {
+        for (k, ne) in [1, 3, 4, 5, 8, 13, 300].into_iter().enumerate() {
+            let nn = ne + 9;
+            let (mut el, u) = random_case::<T>(ne, nn, 40 + k as u64);
+            el.conn[0][0] = (nn - 1) as u32;
+            el.conn[ne - 1][7] = (nn - 1) as u32;
+            el.build_blocks();
+            let guarded = GuardedNodes::new(&u);
+            let u = guarded.nodes::<T>(nn);
+            let mut reference = vec![[[T::ZERO; 3]; 8]; ne];
+            let (mut lanes, mut portable) = (reference.clone(), reference.clone());
+            assert_eq!(element_forces_scalar(&el, u, &mut reference), None);
+            assert_eq!(element_forces(&el, u, &mut lanes), None);
+            assert_eq!(element_forces_portable(&el, u, &mut portable), None);
+            assert_eq!(bits(&lanes), bits(&reference), "{} ne = {ne}", T::NAME);
+            assert_eq!(bits(&portable), bits(&reference), "{} ne = {ne}", T::NAME);
+        }
+    }
+
+    #[test]
+    #[cfg(target_os = "linux")]
+    fn lane_kernels_read_only_inside_the_displacements() {
+        lanes_read_only_inside_u::<f64>();
+        lanes_read_only_inside_u::<f32>();
+    }
+
     fn reports_first_bad_element<T: SimdReal>() {
         let ne = 300;
         let (el, mut u) = random_case::<T>(ne, ne + 9, 5);

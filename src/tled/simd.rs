@@ -768,6 +768,16 @@ mod avx {
         }
 
         #[test]
+        fn all_below_holds_only_when_every_index_has_a_node_after_it() {
+            // a 4-value load from u[n] needs n + 1 < len
+            assert!(all_below(&[0, 3, 5], 7));
+            assert!(!all_below(&[0, 6, 2], 7));
+            assert!(!all_below(&[7], 7));
+            assert!(!all_below(&[0], 1));
+            assert!(all_below(&[0], 2));
+        }
+
+        #[test]
         fn division_by_three_of_every_exponent() {
             for e in 0u64..(1 << 15) {
                 assert_eq!((e * 43691) >> 17, e / 3, "{e}");
@@ -866,6 +876,21 @@ mod layout_tests {
     /// A block's constants are dense: `D` (8 x 3 rows), then `gamma` (8 x 4), then `W`, `k`,
     /// `mu`, `K`, and nothing after them (a longer stride would only waste memory, which no
     /// result shows: cargo-mutants found the sum unchecked).
+    /// `instruction_set` names the copy the dispatch of `element_blocks` picks (the
+    /// verification target prints it beside the bit-for-bit comparison; benchmarks quote it).
+    #[test]
+    fn the_dispatch_names_the_copy_it_runs() {
+        #[cfg(target_arch = "x86_64")]
+        let expected = if std::arch::is_x86_feature_detected!("avx2") {
+            "avx2"
+        } else {
+            "portable"
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let expected = "portable";
+        assert_eq!(instruction_set(), expected);
+    }
+
     #[test]
     fn a_blocks_constants_are_its_named_rows_and_nothing_else() {
         assert_eq!(ROW_GAMMA, 8 * 3);
