@@ -220,7 +220,10 @@ fn malformed_toml_names_file_and_line_or_field() {
             GOOD_TOML.replace("density = 1050.0", "density = 0.0"),
             "density",
         ),
-        (GOOD_TOML.replace("dt = 1e-4", "dt = -1e-4"), "field `dt`"),
+        (
+            GOOD_TOML.replace("dt = 1e-4", "dt = -1e-4"),
+            "field `time.dt`",
+        ),
         (
             GOOD_TOML.replace("nodes = \"z_max\"", "nodes = \"top\""),
             "unknown node set `top`",

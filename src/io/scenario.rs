@@ -511,6 +511,15 @@ fn line_of(text: &str, span: Option<std::ops::Range<usize>>) -> Location {
     }
 }
 
+/// The TOML key paths of the time and numerics fields, named in the messages.
+const SCENARIO_TIME_KEYS: crate::problem::TimeKeys = crate::problem::TimeKeys {
+    dt: "time.dt",
+    total: "time.total",
+    output_every: "time.output_every",
+    damping: "numerics.damping",
+    hourglass_kappa: "numerics.hourglass_kappa",
+};
+
 pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
     let file = path.display().to_string();
     let f = file.as_str();
@@ -527,6 +536,22 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
             ));
         }
     }
+    let nd = &sf.numerics;
+    let default = Numerics::default();
+    let time = TimeSettings {
+        dt: sf.time.dt,
+        total_time: sf.time.total,
+        output_every: sf.time.output_every.unwrap_or(table1::OUTPUT_EVERY),
+    };
+    let numerics = Numerics {
+        damping: nd.damping.unwrap_or(default.damping),
+        hourglass_kappa: nd.hourglass_kappa.unwrap_or(default.hourglass_kappa),
+        variant: nd.variant.unwrap_or(default.variant),
+        niftysim_timing: false,
+    };
+    // `[time]` and `[numerics]` are checked before the mesh is read or generated: a bad step
+    // is refused without the cost of building the model
+    crate::problem::validate_time_and_numerics(&time, &numerics, f, &SCENARIO_TIME_KEYS)?;
     let base = path.parent().unwrap_or(Path::new("."));
     let scale = sf.units.length.unwrap_or_default().metres();
     let (mut mesh, anatomy, skin) = build_mesh(&sf.mesh, f, base, scale)?;
@@ -554,25 +579,14 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
         });
         s
     });
-    let nd = &sf.numerics;
-    let default = Numerics::default();
     let problem = Problem {
         source: file.clone(),
         mesh,
         materials,
         element_material,
         bc,
-        time: TimeSettings {
-            dt: sf.time.dt,
-            total_time: sf.time.total,
-            output_every: sf.time.output_every.unwrap_or(table1::OUTPUT_EVERY),
-        },
-        numerics: Numerics {
-            damping: nd.damping.unwrap_or(default.damping),
-            hourglass_kappa: nd.hourglass_kappa.unwrap_or(default.hourglass_kappa),
-            variant: nd.variant.unwrap_or(default.variant),
-            niftysim_timing: false,
-        },
+        time,
+        numerics,
         additive_constraints: false,
         physics,
     };

@@ -121,12 +121,7 @@ pub struct Problem {
 impl Problem {
     /// Number of iterations the run executes.
     pub fn num_steps(&self) -> usize {
-        let n = (self.time.total_time / self.time.dt).round() as usize;
-        if self.numerics.niftysim_timing {
-            n + 1
-        } else {
-            n
-        }
+        steps_of(&self.time, &self.numerics)
     }
 
     /// Checks everything that is not the mesh's own business: positive moduli, density,
@@ -135,7 +130,7 @@ impl Problem {
         let f = self.source.as_str();
         self.mesh.validate(f)?;
         self.validate_materials(f)?;
-        self.validate_time_and_numerics(f)?;
+        validate_time_and_numerics(&self.time, &self.numerics, f, &TimeKeys::PROBLEM)?;
         self.validate_boundary_conditions(f)?;
         self.validate_saliva(f)?;
         self.validate_wetting(f)?;
@@ -210,76 +205,6 @@ impl Problem {
                 f,
                 Location::Field(format!("element {e}")),
                 "element has no material (it is in no element set)",
-            ));
-        }
-        Ok(())
-    }
-
-    /// Positive time step and duration, at least one step per frame, non-negative damping and hourglass coefficient.
-    fn validate_time_and_numerics(&self, f: &str) -> Result<()> {
-        if !pos(self.time.dt) {
-            return Err(Error::field(
-                f,
-                "dt",
-                format!("time step must be positive, got {}", self.time.dt),
-            ));
-        }
-        if !pos(self.time.total_time) {
-            return Err(Error::field(
-                f,
-                "total_time",
-                format!("total time must be positive, got {}", self.time.total_time),
-            ));
-        }
-        if self.time.output_every == 0 {
-            return Err(Error::field(f, "output_every", "must be at least 1 step"));
-        }
-        // the step and frame counts, from the floats (before any cast can saturate)
-        let steps = self.time.total_time / self.time.dt;
-        if !(steps >= 0.5) {
-            return Err(Error::field(
-                f,
-                "total_time",
-                format!(
-                    "total time {} s is shorter than half the time step {} s: the run would take no step",
-                    self.time.total_time, self.time.dt
-                ),
-            ));
-        }
-        if steps > MAX_STEPS as f64 {
-            return Err(Error::field(
-                f,
-                "dt",
-                format!(
-                    "{:e} s at a time step of {:e} s is {steps:.3e} steps; a run may take at most {MAX_STEPS}",
-                    self.time.total_time, self.time.dt
-                ),
-            ));
-        }
-        let frames = self.num_steps() / self.time.output_every + 1;
-        if frames > MAX_FRAMES {
-            return Err(Error::field(
-                f,
-                "output_every",
-                format!(
-                    "a frame every {} steps of {} is {frames} frames; a run may write at most {MAX_FRAMES}",
-                    self.time.output_every,
-                    self.num_steps()
-                ),
-            ));
-        }
-        if !(self.numerics.damping.is_finite() && self.numerics.damping >= 0.0) {
-            return Err(Error::field(
-                f,
-                "damping",
-                format!("must be >= 0, got {}", self.numerics.damping),
-            ));
-        }
-        if !(self.numerics.hourglass_kappa.is_finite() && self.numerics.hourglass_kappa >= 0.0) {
-            return Err(Error::field(
-                f,
-                "hourglass_kappa",
-                format!("must be >= 0, got {}", self.numerics.hourglass_kappa),
             ));
         }
         Ok(())
@@ -580,4 +505,116 @@ impl Problem {
 /// Finite and positive (NaN is not).
 fn pos(v: f64) -> bool {
     v.is_finite() && v > 0.0
+}
+
+/// The names an input gives the time and numerics fields, for the messages of
+/// [`validate_time_and_numerics`].
+pub struct TimeKeys {
+    pub dt: &'static str,
+    pub total: &'static str,
+    pub output_every: &'static str,
+    pub damping: &'static str,
+    pub hourglass_kappa: &'static str,
+}
+
+impl TimeKeys {
+    /// The [`TimeSettings`] and [`Numerics`] field names (a problem from any reader).
+    pub const PROBLEM: TimeKeys = TimeKeys {
+        dt: "dt",
+        total: "total_time",
+        output_every: "output_every",
+        damping: "damping",
+        hourglass_kappa: "hourglass_kappa",
+    };
+}
+
+/// Positive time step and duration, at least one step per frame, step and frame counts within
+/// [`MAX_STEPS`] and [`MAX_FRAMES`], non-negative damping and hourglass coefficient. It needs
+/// no mesh, so a reader can refuse a bad `[time]` before it builds one.
+pub fn validate_time_and_numerics(
+    time: &TimeSettings,
+    numerics: &Numerics,
+    f: &str,
+    keys: &TimeKeys,
+) -> Result<()> {
+    if !pos(time.dt) {
+        return Err(Error::field(
+            f,
+            keys.dt,
+            format!("time step must be positive, got {}", time.dt),
+        ));
+    }
+    if !pos(time.total_time) {
+        return Err(Error::field(
+            f,
+            keys.total,
+            format!("total time must be positive, got {}", time.total_time),
+        ));
+    }
+    if time.output_every == 0 {
+        return Err(Error::field(
+            f,
+            keys.output_every,
+            "must be at least 1 step",
+        ));
+    }
+    // the step and frame counts, from the floats (before any cast can saturate)
+    let steps = time.total_time / time.dt;
+    if !(steps >= 0.5) {
+        return Err(Error::field(
+            f,
+            keys.total,
+            format!(
+                "total time {} s is shorter than half the time step {} s: the run would take no step",
+                time.total_time, time.dt
+            ),
+        ));
+    }
+    if steps > MAX_STEPS as f64 {
+        return Err(Error::field(
+            f,
+            keys.dt,
+            format!(
+                "{:e} s at a time step of {:e} s is {steps:.3e} steps; a run may take at most {MAX_STEPS}",
+                time.total_time, time.dt
+            ),
+        ));
+    }
+    let frames = steps_of(time, numerics) / time.output_every + 1;
+    if frames > MAX_FRAMES {
+        return Err(Error::field(
+            f,
+            keys.output_every,
+            format!(
+                "a frame every {} steps of {} is {frames} frames; a run may write at most {MAX_FRAMES}",
+                time.output_every,
+                steps_of(time, numerics)
+            ),
+        ));
+    }
+    if !(numerics.damping.is_finite() && numerics.damping >= 0.0) {
+        return Err(Error::field(
+            f,
+            keys.damping,
+            format!("must be >= 0, got {}", numerics.damping),
+        ));
+    }
+    if !(numerics.hourglass_kappa.is_finite() && numerics.hourglass_kappa >= 0.0) {
+        return Err(Error::field(
+            f,
+            keys.hourglass_kappa,
+            format!("must be >= 0, got {}", numerics.hourglass_kappa),
+        ));
+    }
+    Ok(())
+}
+
+/// The number of steps `round(T / dt)` (one more under NiftySim's timing).
+fn steps_of(time: &TimeSettings, numerics: &Numerics) -> usize {
+    let n = (time.total_time / time.dt).round() as usize;
+    if numerics.niftysim_timing {
+        n + 1
+    } else {
+        n
+    }
 }
