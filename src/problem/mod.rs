@@ -580,15 +580,15 @@ pub fn validate_time_and_numerics(
             ),
         ));
     }
-    let frames = steps_of(time, numerics) / time.output_every + 1;
+    let n = steps_of(time, numerics);
+    let frames = n / time.output_every + 1;
     if frames > MAX_FRAMES {
         return Err(Error::field(
             f,
             keys.output_every,
             format!(
-                "a frame every {} steps of {} is {frames} frames; a run may write at most {MAX_FRAMES}",
-                time.output_every,
-                steps_of(time, numerics)
+                "a frame every {} steps of {n} is {frames} frames; a run may write at most {MAX_FRAMES}",
+                time.output_every
             ),
         ));
     }
