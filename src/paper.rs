@@ -223,7 +223,147 @@ pub fn all(model: Model, quick: bool) -> Vec<Spec> {
         }
     }
     v.extend(study(quick));
+    for c in choices(quick).into_iter().filter(|_| model == Model::Face) {
+        for &a in &choice_angles(quick) {
+            let mut o = choice_pins();
+            o.retain(|(k, _)| c.overrides.iter().all(|(ck, _)| ck != k));
+            o.extend(c.overrides.iter().cloned());
+            o.push(("jaw.angle", f(a)));
+            v.push(make(
+                &choice_name(c.name, a),
+                &format!("model choice `{}`: {}, jaw {a} rad", c.choice, c.what),
+                o,
+            ));
+        }
+    }
     v
+}
+
+/// One variant of the model-choice study ([`choices`]): the face model with one modelling
+/// choice the paper does not fix changed.
+#[derive(Clone, Debug)]
+pub struct Variant {
+    /// Its name in run names (`choice_NAME_aANGLE`).
+    pub name: &'static str,
+    /// The choice it belongs to (one plot per choice); the reference belongs to all.
+    pub choice: &'static str,
+    pub what: &'static str,
+    pub overrides: Vec<(&'static str, Value)>,
+}
+
+/// The name of the reference variant of [`choices`].
+pub const CHOICE_REFERENCE: &str = "reference";
+
+/// The study's reference, pinned: every choice the study varies, at the value of the
+/// reference (the uniform saliva layer, nothing more held than the skull's edges, K_glue
+/// 0.1), so that a study run means the same whatever the defaults become.
+fn choice_pins() -> Vec<(&'static str, Value)> {
+    let f = Value::Float;
+    vec![
+        ("mesh.face.saliva_thickness", Value::String("median".into())),
+        ("mesh.face.jaw_weight", f(0.5)),
+        ("mesh.face.thickness", f(0.010)),
+        ("mesh.face.commissure", f(0.0)),
+        ("mesh.face.modiolus_radius", f(0.0)),
+        ("mesh.face.vestibule", f(0.0)),
+        (
+            "mesh.face.hinge_offset",
+            Value::Array(vec![f(0.0), f(0.0), f(0.0)]),
+        ),
+        ("saliva.0.k_glue", f(0.1)),
+    ]
+}
+
+/// The modelling choices the paper leaves open, one change at a time from the reference
+/// (paper/README.md, "What makes a partial opening stable"): the saliva layer as the head's
+/// contours have it, K_glue, where the jaw's rigid motion reaches, what holds the corners
+/// of the mouth (the modiolus), what holds the lips from inside (the vestibule), whether the
+/// lips join through tissue at the commissure, the extrusion depth and the hinge.
+pub fn choices(quick: bool) -> Vec<Variant> {
+    let f = Value::Float;
+    let v = |name, choice, what, overrides| Variant {
+        name,
+        choice,
+        what,
+        overrides,
+    };
+    let all = vec![
+        v(CHOICE_REFERENCE, "all", "reference: uniform saliva layer, skull edges held", vec![]),
+        v(
+            "contours",
+            "layer",
+            "saliva layer as high as the lip contours are apart (uneven)",
+            vec![("mesh.face.saliva_thickness", Value::String("contours".into()))],
+        ),
+        v("kglue005", "kglue", "K_glue = 0.05", vec![("saliva.0.k_glue", f(0.05))]),
+        v("kglue02", "kglue", "K_glue = 0.2", vec![("saliva.0.k_glue", f(0.2))]),
+        v(
+            "jawweight03",
+            "jaw",
+            "rigid jaw: jaw weight >= 0.3 (reaches closer to the lower lip)",
+            vec![("mesh.face.jaw_weight", f(0.3))],
+        ),
+        v(
+            "jawweight08",
+            "jaw",
+            "rigid jaw: jaw weight >= 0.8 (the chin only)",
+            vec![("mesh.face.jaw_weight", f(0.8))],
+        ),
+        v(
+            "modiolus",
+            "corners",
+            "the modioli held: 5 mm around a point 10 mm beyond each corner",
+            vec![("mesh.face.modiolus_radius", f(0.005))],
+        ),
+        v(
+            "vestibule",
+            "inside",
+            "the inner layer held by the bones 8 mm beyond the lip lines (maxilla above, mandible below)",
+            vec![("mesh.face.vestibule", f(0.008))],
+        ),
+        v(
+            "commissure",
+            "commissure",
+            "lips joined through tissue for 3 mm at each corner",
+            vec![("mesh.face.commissure", f(0.003))],
+        ),
+        v(
+            "depth15",
+            "depth",
+            "extruded 15 mm deep instead of 10",
+            vec![("mesh.face.thickness", f(0.015))],
+        ),
+        v(
+            "hingelow",
+            "hinge",
+            "the hinge 15 mm lower",
+            vec![(
+                "mesh.face.hinge_offset",
+                Value::Array(vec![f(0.0), f(-0.015), f(0.0)]),
+            )],
+        ),
+    ];
+    if quick {
+        all.into_iter()
+            .filter(|c| [CHOICE_REFERENCE, "modiolus", "contours"].contains(&c.name))
+            .collect()
+    } else {
+        all
+    }
+}
+
+/// The jaw angles of the model-choice study (rad).
+pub fn choice_angles(quick: bool) -> Vec<f64> {
+    if quick {
+        vec![0.075, 0.1, 0.15]
+    } else {
+        vec![0.05, 0.075, 0.09, 0.105, 0.125, 0.15, 0.2]
+    }
+}
+
+/// The name of a model-choice run.
+pub fn choice_name(variant: &str, angle: f64) -> String {
+    format!("choice_{variant}_a{angle}")
 }
 
 /// The zipper study: the wide opening with stickiness with one thing changed at a time, to

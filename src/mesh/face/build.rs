@@ -92,8 +92,32 @@ pub struct FaceParams {
     pub rows_below: usize,
     /// Quad rows above the saliva row at resolution 1.
     pub rows_above: usize,
-    /// Smallest height of the saliva row (m), where the lip contours meet or nearly meet.
+    /// The saliva layer's thickness across the lips (its extent along each element's axis
+    /// across the layer): `"median"` (the median of the gaps between the two lip contours over
+    /// the mouth, the same for every element), a number of metres (the same for every
+    /// element), or `"contours"` (each column as high as the contours are apart there, at
+    /// least `min_saliva_gap`: the layer the head's modeller drew, uneven).
+    pub saliva_thickness: SalivaThickness,
+    /// Smallest thickness of the saliva layer (m): the floor of `"median"` and of
+    /// `"contours"` where the lip contours meet (the corners).
     pub min_saliva_gap: f64,
+    /// The commissure (m): this length of the saliva row next to each mouth corner is tissue,
+    /// so the lips are joined there through tissue, not through saliva. 0: the saliva runs
+    /// to the corner points of the contours.
+    pub commissure: f64,
+    /// The modiolus: nodes (both layers) within this distance (m, in the front view) of a
+    /// point `modiolus_lateral` beyond each mouth corner, at the corner's height, are held
+    /// with the skull. 0: none.
+    pub modiolus_radius: f64,
+    /// How far beyond each mouth corner the modiolus lies (m).
+    pub modiolus_lateral: f64,
+    /// The lips' attachment to the bone inside the mouth (the labial vestibule, m): nodes of
+    /// the inner layer further than this above the upper lip's line are held with the skull
+    /// (the maxilla), further than this below the lower lip's line move with the jaw (the
+    /// mandible). 0: the inner layer is free (held only where the front is).
+    pub vestibule: f64,
+    /// Added to the rig's (or the estimated) hinge point (m): where the jaw turns.
+    pub hinge_offset: [f64; 3],
     /// Depth of the extruded tissue layer (m).
     pub thickness: f64,
     /// Nodes whose jaw skinning weight is at least this follow the jaw's rotation. 0.5: the
@@ -107,6 +131,25 @@ pub struct FaceParams {
     pub muscle_strength: f64,
 }
 
+/// How thick the saliva layer is ([`FaceParams::saliva_thickness`]): a rule or metres.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(untagged)]
+pub enum SalivaThickness {
+    /// The same thickness for every element (m).
+    Metres(f64),
+    Rule(ThicknessRule),
+}
+
+/// The rules of [`SalivaThickness`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ThicknessRule {
+    /// The median of the gaps between the lip contours, the same for every element.
+    Median,
+    /// Each column as the contours have it (at least `min_saliva_gap`).
+    Contours,
+}
+
 impl Default for FaceParams {
     fn default() -> Self {
         FaceParams {
@@ -118,7 +161,13 @@ impl Default for FaceParams {
             columns: 64,
             rows_below: 32,
             rows_above: 20,
+            saliva_thickness: SalivaThickness::Rule(ThicknessRule::Median),
             min_saliva_gap: 0.0003,
+            commissure: 0.0,
+            modiolus_radius: 0.0,
+            modiolus_lateral: 0.010,
+            vestibule: 0.0,
+            hinge_offset: [0.0; 3],
             thickness: 0.010,
             jaw_weight: 0.5,
             muscle_reach: 0.0045,
@@ -147,6 +196,43 @@ impl FaceParams {
                     format!("must be positive and finite, got {v}"),
                 ));
             }
+        }
+        if let SalivaThickness::Metres(t) = self.saliva_thickness {
+            if !(t.is_finite() && t > 0.0 && t < 0.01) {
+                return Err(Error::field(
+                    file,
+                    field("saliva_thickness"),
+                    format!("must be \"median\", \"contours\" or a thickness in metres in (0, 0.01), got {t}"),
+                ));
+            }
+        }
+        for (name, v) in [
+            ("commissure", self.commissure),
+            ("modiolus_radius", self.modiolus_radius),
+            ("modiolus_lateral", self.modiolus_lateral),
+            ("vestibule", self.vestibule),
+        ] {
+            if !(v.is_finite() && (0.0..0.1).contains(&v)) {
+                return Err(Error::field(
+                    file,
+                    field(name),
+                    format!("must be at least 0 and less than 0.1 m, got {v}"),
+                ));
+            }
+        }
+        if !self
+            .hinge_offset
+            .iter()
+            .all(|v| v.is_finite() && v.abs() < 0.5)
+        {
+            return Err(Error::field(
+                file,
+                field("hinge_offset"),
+                format!(
+                    "each component must be finite and less than 0.5 m in size, got {:?}",
+                    self.hinge_offset
+                ),
+            ));
         }
         if !(self.min_facing > 0.0 && self.min_facing < 1.0) {
             return Err(Error::field(
@@ -411,6 +497,94 @@ impl Contour<'_> {
     }
 }
 
+/// The saliva row between the lip contours, column by column ([`saliva_layer`]).
+#[derive(Clone, Debug, PartialEq)]
+struct SalivaLayer {
+    /// The row's middle (`y`, m): halfway between the two contours.
+    middle: Vec<f64>,
+    /// The row's height (`y`, m): its two vertices lie `height / 2` above and below `middle`.
+    height: Vec<f64>,
+    /// The thickness across the layer every element has (m); `None` for `"contours"`.
+    thickness: Option<f64>,
+    /// Columns whose height was raised to `min_saliva_gap` (`"contours"`).
+    widened: usize,
+    /// How far a lip line moved from its contour (m), the largest over the columns.
+    largest_shift: f64,
+}
+
+/// The saliva row for the mouth columns at `xs` (from corner to corner) whose lower and upper
+/// contours lie at `contour_y` (`(lower, upper)`).
+///
+/// The paper's stretch criterion (eqs. 8-10) stands for the element's strain energy "with all
+/// the elements being the same thickness" (section 3.4.3). With a thickness `t` (the median
+/// of the gaps across the layer, or given) each column keeps its middle between the two
+/// contours and is `t / cos(theta)` high, `theta` the slope of the row's middle line there,
+/// so that every element is `t` thick along its axis across the layer (the normal of the
+/// row in the front view): each lip line moves straight up or down by half the difference
+/// between its column's gap and that height, and nothing else of the lips changes. The gaps
+/// are measured across the layer too (`(upper - lower) cos(theta)`); the two corner columns,
+/// where the contours meet, do not count in the median.
+fn saliva_layer(xs: &[f64], contour_y: &[(f64, f64)], p: &FaceParams) -> SalivaLayer {
+    let n = xs.len();
+    let middle: Vec<f64> = contour_y.iter().map(|&(lo, hi)| 0.5 * (lo + hi)).collect();
+    let cos: Vec<f64> = (0..n)
+        .map(|i| {
+            let (a, b) = (i.saturating_sub(1), (i + 1).min(n - 1));
+            let slope = (middle[b] - middle[a]) / (xs[b] - xs[a]);
+            1.0 / (1.0 + slope * slope).sqrt()
+        })
+        .collect();
+    let gap = p.min_saliva_gap;
+    let (height, thickness, widened): (Vec<f64>, Option<f64>, usize) = match p.saliva_thickness {
+        SalivaThickness::Rule(ThicknessRule::Contours) => {
+            let mut widened = 0;
+            let h = contour_y
+                .iter()
+                .map(|&(lo, hi)| {
+                    if hi - lo < gap {
+                        widened += 1;
+                        gap
+                    } else {
+                        hi - lo
+                    }
+                })
+                .collect();
+            (h, None, widened)
+        }
+        rule => {
+            let t = match rule {
+                SalivaThickness::Metres(t) => t,
+                _ => {
+                    let mut across: Vec<f64> = (1..n.saturating_sub(1))
+                        .map(|i| (contour_y[i].1 - contour_y[i].0) * cos[i])
+                        .collect();
+                    across.sort_by(f64::total_cmp);
+                    let m = across.len();
+                    let median = match m {
+                        0 => gap,
+                        _ if m % 2 == 1 => across[m / 2],
+                        _ => 0.5 * (across[m / 2 - 1] + across[m / 2]),
+                    };
+                    median.max(gap)
+                }
+            };
+            (cos.iter().map(|c| t / c).collect(), Some(t), 0)
+        }
+    };
+    let largest_shift = contour_y
+        .iter()
+        .zip(&height)
+        .map(|(&(lo, hi), h)| 0.5 * ((hi - lo) - h).abs())
+        .fold(0.0, f64::max);
+    SalivaLayer {
+        middle,
+        height,
+        thickness,
+        widened,
+        largest_shift,
+    }
+}
+
 /// Builds the model (module docs). `file` names the source in errors.
 pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> {
     p.validate(file, "")?;
@@ -473,32 +647,44 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
     let side_dx = ((xr - right_edge) / ns as f64).min((left_edge - xl) / ns as f64);
     // the saliva row: contour points in the mouth, a joined row beyond the corners
     let gap = p.min_saliva_gap;
-    let joined = gap.max(side_dx);
+    let mouth = ns..=ns + nm;
     let mut row_lo: Vec<Option<Sample>> = Vec::with_capacity(nc + 1);
     let mut row_hi: Vec<Option<Sample>> = Vec::with_capacity(nc + 1);
     let mut y_lo = Vec::with_capacity(nc + 1);
     let mut y_hi = Vec::with_capacity(nc + 1);
-    let mut widened = 0usize;
+    let layer = saliva_layer(
+        &xs[ns..=ns + nm],
+        &xs[ns..=ns + nm]
+            .iter()
+            .map(|&x| (lower.at(x).x[1], upper.at(x).x[1]))
+            .collect::<Vec<_>>(),
+        p,
+    );
+    let (h_r, h_l) = (layer.height[0], layer.height[nm]);
+    let (m_r, m_l) = (layer.middle[0], layer.middle[nm]);
     for (i, &x) in xs.iter().enumerate() {
-        if (ns..=ns + nm).contains(&i) {
+        if mouth.contains(&i) {
             let (mut lo, mut hi) = (lower.at(x), upper.at(x));
-            if hi.x[1] - lo.x[1] < gap {
-                let m = 0.5 * (hi.x[1] + lo.x[1]);
-                hi.x[1] = m + 0.5 * gap;
-                lo.x[1] = m - 0.5 * gap;
-                widened += 1;
-            }
+            let k = i - ns;
+            lo.x[1] = layer.middle[k] - 0.5 * layer.height[k];
+            hi.x[1] = layer.middle[k] + 0.5 * layer.height[k];
             y_lo.push(lo.x[1]);
             y_hi.push(hi.x[1]);
             row_lo.push(Some(lo));
             row_hi.push(Some(hi));
         } else {
-            let k = if i < ns { ns - i } else { i - ns - nm };
+            // beyond a corner the row is tissue: from the corner column's height it grows
+            // over three columns to the side columns' width
+            let (k, h0, m0) = if i < ns {
+                (ns - i, h_r, m_r)
+            } else {
+                (i - ns - nm, h_l, m_l)
+            };
+            let joined = h0.max(side_dx);
             let t = (k as f64 / 3.0).min(1.0);
-            let h = 0.5 * (gap + (joined - gap) * t * t * (3.0 - 2.0 * t));
-            let yc_side = if i < ns { corner_r[1] } else { corner_l[1] };
-            y_lo.push(yc_side - h);
-            y_hi.push(yc_side + h);
+            let h = 0.5 * (h0 + (joined - h0) * t * t * (3.0 - 2.0 * t));
+            y_lo.push(m0 - h);
+            y_hi.push(m0 + h);
             row_lo.push(None);
             row_hi.push(None);
         }
@@ -627,6 +813,22 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
         }
     }
     let id = |i: usize, r: usize| (r * (nc + 1) + i) as u32;
+    // the saliva quads: the mouth columns' row, less the commissure at each corner
+    let is_saliva = |i: usize| {
+        let xq = 0.5 * (xs[i] + xs[i + 1]);
+        i >= ns && i < ns + nm && xq - xr >= p.commissure && xl - xq >= p.commissure
+    };
+    if !(ns..ns + nm).any(is_saliva) {
+        return Err(Error::field(
+            file,
+            "commissure",
+            format!(
+                "{} mm at each corner leaves no saliva in a mouth {:.1} mm wide",
+                1e3 * p.commissure,
+                1e3 * mouth_w
+            ),
+        ));
+    }
     let mut quads = Vec::with_capacity(nc * nr);
     let mut group_of_quad = Vec::with_capacity(nc * nr);
     for r in 0..nr {
@@ -634,8 +836,8 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
             quads.push([id(i, r), id(i + 1, r), id(i + 1, r + 1), id(i, r + 1)]);
             let g = if r < rb {
                 1 // lower face
-            } else if r > rb || i < ns || i >= ns + nm {
-                0 // upper face (the joined row beyond the corners too)
+            } else if r > rb || !is_saliva(i) {
+                0 // upper face (the joined row beyond the corners and the commissure too)
             } else {
                 2 // saliva
             };
@@ -710,17 +912,6 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
             ),
         ));
     }
-    if let Some(v) = jaw.iter().find(|v| skull.binary_search(v).is_ok()) {
-        return Err(Error::input(
-            file,
-            Location::None,
-            format!(
-                "vertex {v} (column {}, row {}) is both held by the skull and moved by the jaw",
-                *v as usize % (nc + 1),
-                *v as usize / (nc + 1)
-            ),
-        ));
-    }
     let cols = LipColumns {
         x: (ns..=ns + nm).map(|i| xs[i]).collect(),
         upper: (ns..=ns + nm).map(|i| id(i, rb + 1)).collect(),
@@ -730,7 +921,7 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
     // across axes of the saliva elements
     let back = [0.0, 0.0, -1.0];
     let mut across = BTreeMap::new();
-    for i in ns..ns + nm {
+    for i in (ns..ns + nm).filter(|&i| is_saliva(i)) {
         let q = (rb * nc + i) as u32;
         let x = |v: u32| surface.vertices[v as usize];
         let along = sub(x(id(i + 1, rb)), x(id(i, rb)));
@@ -747,6 +938,72 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
     let mut lower_lip = cols.lower.clone();
     for set in [&mut skull, &mut jaw, &mut upper_lip, &mut lower_lip] {
         both(set);
+    }
+    // the modiolus beyond each corner, held with the skull (both layers)
+    if p.modiolus_radius > 0.0 {
+        let centres = [
+            [xr - p.modiolus_lateral, corner_r[1]],
+            [xl + p.modiolus_lateral, corner_l[1]],
+        ];
+        let mut held = 0;
+        for v in 0..nv {
+            let x = surface.vertices[v as usize];
+            if centres
+                .iter()
+                .any(|c| (x[0] - c[0]).hypot(x[1] - c[1]) <= p.modiolus_radius)
+            {
+                skull.extend([v, v + nv]);
+                held += 1;
+            }
+        }
+        if held == 0 {
+            return Err(Error::field(
+                file,
+                "modiolus_radius",
+                format!(
+                    "{} mm around the points {} mm beyond the corners takes no vertex of the model",
+                    1e3 * p.modiolus_radius,
+                    1e3 * p.modiolus_lateral
+                ),
+            ));
+        }
+    }
+    // the vestibule: the inner layer held by the maxilla above the lips, moved by the
+    // mandible below them
+    if p.vestibule > 0.0 {
+        for r in 0..=nr {
+            for i in 0..=nc {
+                let v = id(i, r);
+                let y = surface.vertices[v as usize][1];
+                if r > rb + 1 && y > y_hi[i] + p.vestibule {
+                    skull.push(v + nv);
+                } else if r < rb && y < y_lo[i] - p.vestibule {
+                    jaw.push(v + nv);
+                }
+            }
+        }
+    }
+    for set in [&mut skull, &mut jaw] {
+        set.sort_unstable();
+        set.dedup();
+    }
+    if let Some(v) = jaw.iter().find(|v| skull.binary_search(v).is_ok()) {
+        let s = *v % nv;
+        return Err(Error::input(
+            file,
+            Location::None,
+            format!(
+                "node {v} (column {}, row {}{}) is both held by the skull{} and moved by the jaw",
+                s as usize % (nc + 1),
+                s as usize / (nc + 1),
+                if *v >= nv { ", inner layer" } else { "" },
+                if p.modiolus_radius > 0.0 {
+                    " (or the modiolus: make modiolus_radius smaller)"
+                } else {
+                    ""
+                }
+            ),
+        ));
     }
     let sets = &mut mesh.node_sets;
     sets.insert("skull".into(), skull);
@@ -805,11 +1062,18 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
         mesh.nodes.len(),
         cols.x.len()
     )];
-    if widened > 0 {
-        notes.push(format!(
-            "the saliva row was widened to {} mm at {widened} columns where the lip contours are closer (the corners)",
-            1e3 * gap
-        ));
+    match layer.thickness {
+        Some(t) => notes.push(format!(
+            "every saliva element is {:.3} mm thick across the layer; the lip lines moved up or down by at most {:.3} mm from the contours",
+            1e3 * t,
+            1e3 * layer.largest_shift
+        )),
+        None if layer.widened > 0 => notes.push(format!(
+            "the saliva row was widened to {} mm at {} columns where the lip contours are closer (the corners)",
+            1e3 * gap,
+            layer.widened
+        )),
+        None => {}
     }
     Ok(FaceModel {
         params: p.clone(),
@@ -817,7 +1081,10 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
         source: d.source.clone(),
         surface,
         mesh,
-        jaw_hinge: (d.hinge_point, d.hinge_axis),
+        jaw_hinge: (
+            [0, 1, 2].map(|k| d.hinge_point[k] + p.hinge_offset[k]),
+            d.hinge_axis,
+        ),
         muscles,
         columns: cols,
         inner_offset: nv,
@@ -832,6 +1099,16 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
 mod tests {
     use super::*;
     use crate::element::hex8;
+
+    fn model_with(resolution: f64, f: impl Fn(&mut FaceParams)) -> FaceModel {
+        let src = super::super::makehuman().unwrap();
+        let mut p = FaceParams {
+            resolution,
+            ..Default::default()
+        };
+        f(&mut p);
+        build(&src, &p, "makehuman").unwrap()
+    }
 
     fn model(resolution: f64) -> FaceModel {
         let src = super::super::makehuman().unwrap();
@@ -923,6 +1200,51 @@ mod tests {
         let g = m.surface.group_index("saliva").unwrap() as u32;
         let n = m.surface.group_of_quad.iter().filter(|&&q| q == g).count();
         assert_eq!(n, sal.len());
+    }
+
+    /// Each saliva element's extent along its axis across the layer (m), by element.
+    fn thicknesses(m: &FaceModel) -> Vec<f64> {
+        m.mesh.element_sets["saliva"]
+            .iter()
+            .map(|&e| {
+                let a = m.saliva_across[&e];
+                let x = m.mesh.element_coords(e as usize);
+                let along: Vec<f64> = x.iter().map(|p| crate::linalg::dot(p, &a)).collect();
+                along.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+                    - along.iter().copied().fold(f64::INFINITY, f64::min)
+            })
+            .collect()
+    }
+
+    /// Paper section 3.4.3: the stretch criterion assumes "all the elements being the same
+    /// thickness". By default every saliva element is the median gap thick; with
+    /// `"contours"` the layer is as uneven as the head's lips are apart.
+    #[test]
+    fn the_saliva_layer_is_equally_thick_by_default() {
+        for res in [0.25, 1.0] {
+            let m = model(res);
+            let t = thicknesses(&m);
+            let (lo, hi) = (
+                t.iter().copied().fold(f64::INFINITY, f64::min),
+                t.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            );
+            eprintln!(
+                "resolution {res}: saliva {:.4} .. {:.4} mm",
+                1e3 * lo,
+                1e3 * hi
+            );
+            let uneven = model_with(res, |p| {
+                p.saliva_thickness = SalivaThickness::Rule(ThicknessRule::Contours)
+            });
+            let tu = thicknesses(&uneven);
+            let (ulo, uhi) = (
+                tu.iter().copied().fold(f64::INFINITY, f64::min),
+                tu.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            );
+            eprintln!("contours: {:.4} .. {:.4} mm", 1e3 * ulo, 1e3 * uhi);
+            assert!(hi / lo < 1.01, "{lo} .. {hi}");
+            assert!(uhi / ulo > 1.3, "{ulo} .. {uhi}");
+        }
     }
 
     #[test]

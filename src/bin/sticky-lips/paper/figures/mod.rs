@@ -1,5 +1,6 @@
 //! One producer per figure, listed in [`TABLE`] with the runs each needs.
 
+mod choices;
 mod fig1;
 mod fig10;
 mod fig11;
@@ -122,6 +123,12 @@ pub const TABLE: &[Figure] = &[
         what: "what sets the zip front's speed",
         runs: |_, quick| study::names(quick),
         produce: study::produce,
+    },
+    Figure {
+        name: "choices",
+        what: "the modelling choices the paper leaves open, one at a time: load and equilibrium opening",
+        runs: choices::names,
+        produce: choices::produce,
     },
     Figure {
         name: "plots",
