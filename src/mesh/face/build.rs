@@ -1247,6 +1247,88 @@ mod tests {
         }
     }
 
+    /// The modelling choices of the study: each changes what it says and nothing else.
+    #[test]
+    fn commissure_modiolus_vestibule_and_hinge_offset_change_what_they_say() {
+        let base = model(0.25);
+        let count = |m: &FaceModel, set: &str| m.mesh.node_sets[set].len();
+        let sal = |m: &FaceModel| m.mesh.element_sets["saliva"].len();
+        // commissure: the saliva quads within 3 mm of a corner become tissue
+        let c = model_with(0.25, |p| p.commissure = 0.003);
+        let (xr, xl) = (base.columns.x[0], *base.columns.x.last().unwrap());
+        let near = base.mesh.element_sets["saliva"]
+            .iter()
+            .filter(|&&e| {
+                let x = base.mesh.element_coords(e as usize);
+                let xq = x[..4].iter().map(|p| p[0]).sum::<f64>() / 4.0;
+                xq - xr < 0.003 || xl - xq < 0.003
+            })
+            .count();
+        assert!(near >= 2, "{near}");
+        assert_eq!(sal(&c), sal(&base) - near);
+        assert_eq!(c.mesh.nodes, base.mesh.nodes);
+        assert_eq!(c.saliva_across.len(), sal(&c));
+        // modiolus: more nodes held, none of them in the jaw set, the rest unchanged
+        let m = model_with(0.25, |p| p.modiolus_radius = 0.005);
+        assert!(count(&m, "skull") > count(&base, "skull"));
+        assert_eq!(m.mesh.node_sets["jaw"], base.mesh.node_sets["jaw"]);
+        assert!(base.mesh.node_sets["skull"]
+            .iter()
+            .all(|n| m.mesh.node_sets["skull"].binary_search(n).is_ok()));
+        // vestibule: inner-layer nodes only join the skull and the jaw
+        let v = model_with(0.25, |p| p.vestibule = 0.008);
+        let nv = v.inner_offset;
+        for set in ["skull", "jaw"] {
+            let extra: Vec<u32> = v.mesh.node_sets[set]
+                .iter()
+                .copied()
+                .filter(|n| base.mesh.node_sets[set].binary_search(n).is_err())
+                .collect();
+            assert!(!extra.is_empty(), "{set}");
+            assert!(extra.iter().all(|&n| n >= nv), "{set}: a front node added");
+        }
+        // hinge offset
+        let h = model_with(0.25, |p| p.hinge_offset = [0.0, -0.015, 0.0]);
+        assert!((h.jaw_hinge.0[1] - (base.jaw_hinge.0[1] - 0.015)).abs() < 1e-15);
+        // refusals name the field
+        let src = super::super::makehuman().unwrap();
+        for (p, field) in [
+            (
+                FaceParams {
+                    commissure: 0.03,
+                    resolution: 0.25,
+                    ..Default::default()
+                },
+                "commissure",
+            ),
+            (
+                FaceParams {
+                    saliva_thickness: SalivaThickness::Metres(-1.0),
+                    ..Default::default()
+                },
+                "saliva_thickness",
+            ),
+            (
+                FaceParams {
+                    hinge_offset: [0.0, 1e300, 0.0],
+                    ..Default::default()
+                },
+                "hinge_offset",
+            ),
+            (
+                FaceParams {
+                    modiolus_radius: 0.05,
+                    resolution: 0.25,
+                    ..Default::default()
+                },
+                "modiolus_radius",
+            ),
+        ] {
+            let e = build(&src, &p, "face.json").unwrap_err().to_string();
+            assert!(e.contains(field), "{field}: {e}");
+        }
+    }
+
     #[test]
     fn skull_and_jaw_are_apart_and_the_hinge_opens_the_mouth() {
         let m = model(0.25);
