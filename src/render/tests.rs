@@ -280,6 +280,7 @@ fn texture_sampling_returns_texels() {
             normals: [[0.0; 3]; 3],
             uv: Some(t.map(|i| uv[i])),
             colour: [1, 2, 3],
+            colours: None,
             edges: 0,
         })
         .collect();
