@@ -7,8 +7,13 @@
 //! them (atomically).
 //!
 //! - [`raster`]: [`Image`], [`Camera`] (perspective or orthographic, [`Camera::fit`]),
-//!   [`rasterize`] (z-buffer, Lambert shading, textures, supersampling).
-//! - [`surface`]: [`boundary_quads`] of a hexahedral mesh and normals.
+//!   [`rasterize`] (z-buffer, Lambert shading, textures and per-vertex colours sampled per
+//!   pixel, supersampling).
+//! - [`surface`]: [`boundary_quads`] of a hexahedral mesh and normals (hard or soft
+//!   creases: [`corner_normals`], [`corner_normals_weighted`], [`soft_crease`]).
+//! - triangles of a mesh's quads: [`mesh_triangles`] (a colour per face, or the texture),
+//!   [`paint_triangles`] (a [`FacePaint`] per face: a colour, a colour per corner, or the
+//!   texture).
 //! - [`plot`]: [`plot::line_plot`], [`plot::profile_plot`], [`plot::heatmap_plot`].
 //! - text: [`Image::label`], [`text_size`] with the embedded DejaVu Sans font.
 //!
