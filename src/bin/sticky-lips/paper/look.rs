@@ -15,16 +15,19 @@
 //!   sharing it that are intact, shrunk about its midpoint: 1 between two intact elements,
 //!   1/2 where an intact element meets a broken one (the zip front), 0 between two broken
 //!   ones. Between rungs the membrane is interpolated linearly, like a nodal field of the
-//!   finite element model. The zip front so reads as a taper whose half height sits exactly
-//!   at the element boundary where the simulation has it, instead of a vertical step (the
-//!   side wall of the last intact hexahedron, which the old renderings showed with a gap
-//!   behind it at each broken element). Nothing of the simulation is changed: node
-//!   positions are the run's, the broken flags are the run's (`saliva_broken`);
+//!   finite element model: the last intact element tapers from full to half height, the
+//!   first broken one shows a sliver from half height to nothing (so the picture spreads
+//!   the element-wise state over one element each side of the front, symmetrically). The
+//!   zip front so reads as a taper whose half height sits exactly at the element boundary
+//!   where the simulation has it, instead of a vertical step (the end of the last intact
+//!   hexahedron and its side wall, which the renderings before showed at each element
+//!   boundary of the opening). Nothing of the simulation is changed: node positions are the
+//!   run's, the broken flags are the run's (`saliva_broken`);
 //! - shading: smooth, from corner normals (faces within [`SMOOTH_DEGREES`] averaged, a
 //!   hard crease beyond, which keeps the slab's rim sharp), but with a soft crease
 //!   ([`soft_crease`], up to [`SHARP_DEGREES`]) across the edges of a lip's inner surface:
 //!   the fold between a lip's front and its inner surface (35 to 115 degrees over the
-//!   frames of the quick runs) is then shaded alike in every column instead of smooth in
+//!   frames drawn for Figs. 4 and 9 from the quick runs) is then shaded alike in every column instead of smooth in
 //!   some and sharp in others (the hard 60-degree crease drew notches along the lips,
 //!   column by column);
 //! - colours per pixel: a texture through the mesh's per-node texture coordinates
