@@ -8,9 +8,9 @@
 //! - the tissue (every element but the saliva ones): its boundary at the displaced node
 //!   positions, the lips' inner surfaces included (where the saliva holds them they lie
 //!   inside the saliva layer and are hidden behind it);
-//! - the saliva layer as a membrane ([`Membrane`]): the saliva elements' outer faces (the
-//!   front and back faces of the row, the faces that are on the model's boundary), not their
-//!   side walls. Each rung of the row (the element edge across the layer, from a node on
+//! - the saliva layer as a membrane ([`Membrane`]): the saliva elements' faces on the
+//!   model's boundary (the row's front and back; a row's end only where it is the model's
+//!   edge), never the walls between two saliva elements. Each rung of the row (the element edge across the layer, from a node on
 //!   one lip to its partner on the other) is drawn at the fraction of the saliva elements
 //!   sharing it that are intact, shrunk about its midpoint: 1 between two intact elements,
 //!   1/2 where an intact element meets a broken one (the zip front), 0 between two broken
@@ -39,6 +39,7 @@ use std::collections::HashMap;
 use sticky_lips::element::hex8::FACES as HEX_FACES;
 use sticky_lips::error::Result;
 use sticky_lips::measures::LipColumns;
+use sticky_lips::mesh::Mesh;
 use sticky_lips::render::raster::{Camera, Projection, RenderOptions};
 use sticky_lips::render::{
     boundary_quads_where, corner_normals_weighted, paint_triangles, rasterize, soft_crease,
@@ -147,8 +148,8 @@ impl Membrane {
     /// at the row's ends a side face touches tissue too, but not its opposite); where no
     /// or several pairs qualify, the pair nearest each other in the reference
     /// configuration (the layer is thin across).
-    pub fn new(p: &Problem, saliva: &[bool]) -> Membrane {
-        let els = &p.mesh.elements;
+    pub fn new(mesh: &Mesh, saliva: &[bool]) -> Membrane {
+        let els = &mesh.elements;
         let key = |e: &[u32; 8], f: usize| {
             let mut k: [u32; 4] = std::array::from_fn(|i| e[HEX_FACES[f][i]]);
             k.sort_unstable();
@@ -166,7 +167,7 @@ impl Membrane {
                 .iter()
                 .any(|&o| !saliva.get(o as usize).copied().unwrap_or(false))
         };
-        let x0 = &p.mesh.nodes;
+        let x0 = &mesh.nodes;
         let centroid = |el: &[u32; 8], f: usize| {
             let mut c = [0.0; 3];
             for &i in &HEX_FACES[f] {
@@ -286,7 +287,7 @@ pub fn render(
     let is_hidden = |e: u32| hidden.get(e as usize).copied().unwrap_or(false);
     let mut faces =
         boundary_quads_where(&p.mesh.elements, |e| !saliva[e as usize] && !is_hidden(e));
-    let membrane = Membrane::new(p, &saliva);
+    let membrane = Membrane::new(&p.mesh, &saliva);
     let intact = membrane.intact(hidden);
     faces.extend(membrane.faces.iter().copied());
     let x = membrane.extend(&x, &intact);
@@ -518,4 +519,61 @@ pub fn displaced(
 /// `1e3 x` (m to mm).
 pub fn mm(x: f64) -> f64 {
     1e3 * x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_membrane_tapers_to_half_height_at_a_broken_element_and_has_no_inner_walls() {
+        // 3 x 3 x 1 cells: the middle row (elements 3, 4, 5) is the saliva between the two
+        // lips (rows 0 and 2); element 4 has broken.
+        let mesh = sticky_lips::mesh::generate::block([0.0; 3], [3.0, 3.0, 1.0], [3, 3, 1]);
+        let saliva: Vec<bool> = (0..9).map(|e| (3..6).contains(&e)).collect();
+        let m = Membrane::new(&mesh, &saliva);
+        // the front and back faces of the three elements (local faces 0 and 1) and the
+        // row's two ends (on the model's edge here), no wall between saliva elements; the
+        // rungs run across the layer (along y)
+        assert_eq!(m.faces.len(), 8);
+        assert!(m.faces.iter().all(|f| saliva[f.element as usize]));
+        assert_eq!(m.faces.iter().filter(|f| f.local_face <= 1).count(), 6);
+        for f in m.faces.iter().filter(|f| f.local_face > 1) {
+            let xs = f.nodes.map(|n| {
+                let (a, _) = m.ends[n as usize - mesh.nodes.len()];
+                mesh.nodes[a as usize][0]
+            });
+            assert!(
+                xs.iter().all(|&x| x == 0.0) || xs.iter().all(|&x| x == 3.0),
+                "{xs:?}"
+            );
+        }
+        for &(a, b) in &m.ends {
+            let (pa, pb) = (mesh.nodes[a as usize], mesh.nodes[b as usize]);
+            assert_eq!((pa[0], pa[2]), (pb[0], pb[2]));
+            assert_eq!((pa[1] - pb[1]).abs(), 1.0);
+        }
+        let hidden: Vec<bool> = (0..9).map(|e| e == 4).collect();
+        let intact = m.intact(&hidden);
+        let x = m.extend(&mesh.nodes, &intact);
+        assert_eq!(x.len(), mesh.nodes.len() + m.ends.len());
+        for (i, &(a, _)) in m.ends.iter().enumerate() {
+            let p = mesh.nodes[a as usize];
+            // rungs at x = 0 and 3: one intact element; at x = 1 and 2: an intact and the
+            // broken one
+            let want = if p[0] == 0.0 || p[0] == 3.0 { 1.0 } else { 0.5 };
+            assert_eq!(intact[i], want, "rung at {p:?}");
+            // shrunk about the rung's midpoint (y = 1.5)
+            let y = x[mesh.nodes.len() + i][1];
+            assert!(
+                (y - (1.5 + want * (p[1] - 1.5))).abs() < 1e-12,
+                "{y} at {p:?}"
+            );
+        }
+        // nothing broken: the membrane is the saliva's faces exactly
+        let full = m.extend(&mesh.nodes, &m.intact(&[]));
+        for (i, &(a, _)) in m.ends.iter().enumerate() {
+            assert_eq!(full[mesh.nodes.len() + i], mesh.nodes[a as usize]);
+        }
+    }
 }
