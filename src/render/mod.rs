@@ -7,8 +7,13 @@
 //! them (atomically).
 //!
 //! - [`raster`]: [`Image`], [`Camera`] (perspective or orthographic, [`Camera::fit`]),
-//!   [`rasterize`] (z-buffer, Lambert shading, textures, supersampling).
-//! - [`surface`]: [`boundary_quads`] of a hexahedral mesh and normals.
+//!   [`rasterize`] (z-buffer, Lambert shading, textures and per-vertex colours sampled per
+//!   pixel, supersampling).
+//! - [`surface`]: [`boundary_quads`] of a hexahedral mesh and normals (hard or soft
+//!   creases: [`corner_normals`], [`corner_normals_weighted`], [`soft_crease`]).
+//! - triangles of a mesh's quads: [`mesh_triangles`] (a colour per face, or the texture),
+//!   [`paint_triangles`] (a [`FacePaint`] per face: a colour, a colour per corner, or the
+//!   texture).
 //! - [`plot`]: [`plot::line_plot`], [`plot::profile_plot`], [`plot::heatmap_plot`].
 //! - text: [`Image::label`], [`text_size`] with the embedded DejaVu Sans font.
 //!
@@ -37,8 +42,8 @@ pub use raster::{
     Wireframe, BLACK, WHITE,
 };
 pub use surface::{
-    boundary_quads, boundary_quads_where, corner_normals, face_centroid, face_normal,
-    vertex_normals, BoundaryFace,
+    boundary_quads, boundary_quads_where, corner_normals, corner_normals_weighted, face_centroid,
+    face_normal, soft_crease, vertex_normals, BoundaryFace,
 };
 pub use text::{text_size, FONT_BYTES};
 
@@ -62,10 +67,56 @@ pub fn mesh_triangles(
     crease_degrees: f64,
 ) -> Vec<Triangle> {
     let normals = corner_normals(positions, faces, crease_degrees);
+    quad_triangles(positions, faces, &normals, uv, &|f| {
+        (face_colour(f), None, true)
+    })
+}
+
+/// How [`paint_triangles`] colours one boundary face.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FacePaint {
+    /// One colour over the whole face.
+    Colour([u8; 3]),
+    /// A colour at each corner (in the order of the face's `nodes`), interpolated per
+    /// pixel, so that the colour varies smoothly inside the face (and is continuous across
+    /// faces that give a shared node the same colour).
+    Corners([[u8; 3]; 4]),
+    /// The texture, sampled per pixel (bilinearly) through the per-node texture
+    /// coordinates; the colour where there are no texture coordinates or no texture.
+    Texture([u8; 3]),
+}
+
+/// [`mesh_triangles`] with a [`FacePaint`] per face and the corner normals given (e.g. from
+/// [`corner_normals_weighted`], one entry per face).
+pub fn paint_triangles(
+    positions: &[[f64; 3]],
+    faces: &[BoundaryFace],
+    normals: &[[[f64; 3]; 4]],
+    paint: &dyn Fn(&BoundaryFace) -> FacePaint,
+    uv: Option<&[[f64; 2]]>,
+) -> Vec<Triangle> {
+    quad_triangles(positions, faces, normals, uv, &|f| match paint(f) {
+        FacePaint::Colour(c) => (c, None, false),
+        FacePaint::Corners(cs) => (cs[0], Some(cs), false),
+        FacePaint::Texture(c) => (c, None, true),
+    })
+}
+
+/// The triangles of the quads: `style(face)` gives the colour, the corner colours (if any)
+/// and whether the texture coordinates apply.
+#[allow(clippy::type_complexity)]
+fn quad_triangles(
+    positions: &[[f64; 3]],
+    faces: &[BoundaryFace],
+    normals: &[[[f64; 3]; 4]],
+    uv: Option<&[[f64; 2]]>,
+    style: &dyn Fn(&BoundaryFace) -> ([u8; 3], Option<[[u8; 3]; 4]>, bool),
+) -> Vec<Triangle> {
     let mut out = Vec::with_capacity(2 * faces.len());
-    for (f, n) in faces.iter().zip(&normals) {
+    for (f, n) in faces.iter().zip(normals) {
         let p = |i: usize| positions[f.nodes[i] as usize];
-        let colour = face_colour(f);
+        let (colour, corners, textured) = style(f);
+        let uv = if textured { uv } else { None };
         // Corner triples and edge masks (bit i: edge from corner i to corner i+1).
         let split: [([usize; 3], u8); 2] = if norm(sub(p(2), p(0))) <= norm(sub(p(3), p(1))) {
             [([0, 1, 2], 0b011), ([0, 2, 3], 0b110)]
@@ -78,6 +129,7 @@ pub fn mesh_triangles(
                 normals: c.map(|i| n[i]),
                 uv: uv.map(|uv| c.map(|i| uv[f.nodes[i] as usize])),
                 colour,
+                colours: corners.map(|cs| c.map(|i| cs[i])),
                 edges,
             });
         }

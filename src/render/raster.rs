@@ -1,7 +1,7 @@
 //! A small CPU software rasterizer: RGB images, a pinhole (or orthographic) camera, and
 //! z-buffered triangles with perspective-correct interpolation, Lambert shading (flat,
-//! Gouraud or per-pixel) under directional lights plus ambient, per-triangle colours or a
-//! bilinearly sampled texture, optional quad-edge wireframe, and supersampling
+//! Gouraud or per-pixel) under directional lights plus ambient, per-triangle colours,
+//! per-vertex colours interpolated per pixel, or a bilinearly sampled texture, optional quad-edge wireframe, and supersampling
 //! anti-aliasing (render at `s` times the size, then box-downsample).
 //!
 //! Conventions: pixel `(x, y)` has its centre at `(x + 0.5, y + 0.5)`, `y` grows downwards;
@@ -575,10 +575,13 @@ pub struct Triangle {
     /// flipped together with the face when the triangle is seen from behind (two-sided
     /// lighting).
     pub normals: [[f64; 3]; 3],
-    /// Texture coordinates; the texture passed to [`rasterize`] replaces `colour` where
-    /// these are given.
+    /// Texture coordinates; the texture passed to [`rasterize`] replaces `colour` (and
+    /// `colours`) where these are given.
     pub uv: Option<[[f64; 2]; 3]>,
     pub colour: [u8; 3],
+    /// A colour per vertex, interpolated per pixel (perspective-correct like the texture
+    /// coordinates); replaces `colour` where given (and no texture applies).
+    pub colours: Option<[[u8; 3]; 3]>,
     /// Bit `i` set: the edge from vertex `i` to vertex `(i + 1) % 3` is drawn by the
     /// wireframe option.
     pub edges: u8,
@@ -592,6 +595,7 @@ impl Triangle {
             normals: [[0.0; 3]; 3],
             uv: None,
             colour,
+            colours: None,
             edges: 0b111,
         }
     }
@@ -606,7 +610,8 @@ struct ClipVertex {
     view: [f64; 3],
     normal: [f64; 3], // camera frame, already flipped towards the viewer
     uv: [f64; 2],
-    light: f64, // Gouraud intensity
+    colour: [f64; 3], // per-vertex colour (the triangle's where it has none)
+    light: f64,       // Gouraud intensity
 }
 
 impl ClipVertex {
@@ -619,6 +624,7 @@ impl ClipVertex {
                 self.uv[0] + (o.uv[0] - self.uv[0]) * t,
                 self.uv[1] + (o.uv[1] - self.uv[1]) * t,
             ],
+            colour: l3(self.colour, o.colour),
             light: self.light + (o.light - self.light) * t,
         }
     }
@@ -641,6 +647,8 @@ struct ScreenTriangle {
     v: [ScreenVertex; 3],
     colour: [f64; 3],
     textured: bool,
+    /// Interpolate the vertices' colours (else `colour` throughout).
+    vertex_coloured: bool,
     flat_light: f64,
     edges: u8,
     ymin: i64,
@@ -728,6 +736,11 @@ pub fn rasterize(
                     view: camera.to_view(p[i]),
                     normal: n,
                     uv: t.uv.map(|uv| uv[i]).unwrap_or([0.0; 2]),
+                    colour: t
+                        .colours
+                        .map(|c| c[i])
+                        .unwrap_or(t.colour)
+                        .map(|c| c as f64),
                     light,
                 }
             });
@@ -756,6 +769,7 @@ pub fn rasterize(
             }
             let colour = t.colour.map(|c| c as f64);
             let textured = t.uv.is_some() && texture.is_some();
+            let vertex_coloured = !textured && t.colours.is_some();
             let project = |v: &ClipVertex| -> Option<ScreenVertex> {
                 let (x, y) = camera.view_to_pixel(v.view, w as f64, h as f64)?;
                 let (key, pw) = if perspective {
@@ -784,6 +798,7 @@ pub fn rasterize(
                     v,
                     colour,
                     textured,
+                    vertex_coloured,
                     flat_light,
                     edges: if clipped { 0 } else { t.edges },
                     ymin: (ymin - 0.5).floor().max(0.0) as i64,
@@ -911,6 +926,10 @@ fn draw_triangle(
                 texture
                     .map(|tex| tex.sample_bilinear(u, v))
                     .unwrap_or(t.colour)
+            } else if t.vertex_coloured {
+                std::array::from_fn(|k| {
+                    q0 * a.attr.colour[k] + q1 * b.attr.colour[k] + q2 * c.attr.colour[k]
+                })
             } else {
                 t.colour
             };

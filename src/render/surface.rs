@@ -106,6 +106,41 @@ pub fn corner_normals(
     faces: &[BoundaryFace],
     crease_degrees: f64,
 ) -> Vec<[[f64; 3]; 4]> {
+    corner_normals_weighted(positions, faces, &|_, _, cos| {
+        soft_crease(cos, crease_degrees, crease_degrees)
+    })
+}
+
+/// A soft crease: the weight of a neighbouring face whose normal makes an angle with
+/// cosine `cos` with this face's: 1 within `smooth_degrees`, 0 beyond `sharp_degrees`, and
+/// in between falling smoothly (a smoothstep in the angle), so that the shading is a
+/// continuous function of the geometry: two neighbouring columns of a mesh whose fold angles
+/// straddle a hard threshold (one at 58 degrees, one at 62) are then shaded alike instead of
+/// one smooth and one sharp. `sharp_degrees <= smooth_degrees` is a hard crease.
+pub fn soft_crease(cos: f64, smooth_degrees: f64, sharp_degrees: f64) -> f64 {
+    let smooth = smooth_degrees.clamp(0.0, 180.0);
+    let sharp = sharp_degrees.clamp(0.0, 180.0);
+    if cos >= smooth.to_radians().cos() - 1e-12 {
+        return 1.0;
+    }
+    if sharp <= smooth {
+        return 0.0;
+    }
+    let deg = cos.clamp(-1.0, 1.0).acos().to_degrees();
+    let t = ((sharp - deg) / (sharp - smooth)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// [`corner_normals`] with the neighbours weighted by `weight(face, neighbour, cos)` in
+/// `[0, 1]` (`face`, `neighbour`: indices into `faces`; `cos`: the cosine of the angle
+/// between their normals): the normal at a corner is the area-weighted average of the
+/// normals of the faces at that node, each also weighted by `weight` (the face itself by
+/// 1). A hard crease is a weight of 1 or 0; [`soft_crease`] falls smoothly between.
+pub fn corner_normals_weighted(
+    positions: &[[f64; 3]],
+    faces: &[BoundaryFace],
+    weight: &dyn Fn(usize, usize, f64) -> f64,
+) -> Vec<[[f64; 3]; 4]> {
     let areas: Vec<[f64; 3]> = faces
         .iter()
         .map(|f| quad_vector_area(positions, f.nodes))
@@ -129,7 +164,6 @@ pub fn corner_normals(
             fill[v as usize] += 1;
         }
     }
-    let cos_crease = crease_degrees.clamp(0.0, 180.0).to_radians().cos();
     faces
         .iter()
         .enumerate()
@@ -139,8 +173,15 @@ pub fn corner_normals(
                 let mut s = [0.0; 3];
                 for &g in &adj[start[v]..start[v + 1]] {
                     let g = g as usize;
-                    if g == fi || dot(units[g], units[fi]) >= cos_crease - 1e-12 {
+                    let w = if g == fi {
+                        1.0
+                    } else {
+                        weight(fi, g, dot(units[g], units[fi]))
+                    };
+                    if w == 1.0 {
                         s = add(s, areas[g]);
+                    } else if w > 0.0 {
+                        s = add(s, scale(areas[g], w));
                     }
                 }
                 let n = normalize(s);

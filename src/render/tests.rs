@@ -280,6 +280,7 @@ fn texture_sampling_returns_texels() {
             normals: [[0.0; 3]; 3],
             uv: Some(t.map(|i| uv[i])),
             colour: [1, 2, 3],
+            colours: None,
             edges: 0,
         })
         .collect();
@@ -647,4 +648,134 @@ fn the_makehuman_masks_decode_as_jpeg() {
         .chunks_exact(3)
         .all(|p| p[0] == p[1] && p[1] == p[2]));
     assert!(super::decode_jpeg(b"not a jpeg").is_err());
+}
+
+/// The unit cube seen head-on through its y- face (local face 2), unlit, with the pixels
+/// of that face's interior (a margin in from its edges).
+fn front_face_pixels(img: &Image) -> Vec<[u8; 3]> {
+    let mut out = Vec::new();
+    for y in 0..img.height {
+        for x in 0..img.width {
+            let p = img.get(x, y);
+            if p != BG {
+                out.push(p);
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn a_texture_varies_inside_one_quad_of_a_mesh() {
+    // One hexahedron; its front face (y-) maps the left half of the texture (red) to its
+    // left half and the right half (blue) to its right: both show inside the one quad, so
+    // the texture is sampled per pixel, not once per face.
+    let (nodes, faces) = unit_cube();
+    let uv: Vec<[f64; 2]> = nodes.iter().map(|p| [p[0], p[2]]).collect();
+    let (red, blue) = ([220, 20, 20], [20, 20, 220]);
+    let mut tex = Image::new(2, 1, red);
+    tex.set(1, 0, blue);
+    let normals = corner_normals(&nodes, &faces, DEFAULT_CREASE_DEGREES);
+    let front = |f: &BoundaryFace| {
+        if f.local_face == 2 {
+            FacePaint::Texture([0, 0, 0])
+        } else {
+            FacePaint::Colour([0, 0, 0])
+        }
+    };
+    let tris = paint_triangles(&nodes, &faces, &normals, &front, Some(&uv));
+    let cam = front_camera(Projection::Orthographic);
+    let img = rasterize(&tris, Some(&tex), &cam, &RenderOptions::unlit(128, 96));
+    let px = front_face_pixels(&img);
+    let near = |p: &[u8; 3], c: [u8; 3]| (0..3).all(|k| (p[k] as i32 - c[k] as i32).abs() <= 6);
+    let n_red = px.iter().filter(|p| near(p, red)).count();
+    let n_blue = px.iter().filter(|p| near(p, blue)).count();
+    assert!(n_red > 100 && n_blue > 100, "red {n_red}, blue {n_blue}");
+    // left of the centre red, right blue (the texture's u runs with x)
+    assert!(near(&img.get(50, 48), red), "{:?}", img.get(50, 48));
+    assert!(near(&img.get(78, 48), blue), "{:?}", img.get(78, 48));
+    // and a blend between (bilinear), not a step only
+    assert!(px.iter().any(|p| p[0] > 60 && p[2] > 60));
+    // a face colour per quad (the old way) gives one colour over the face
+    let flat = |f: &BoundaryFace| FacePaint::Colour(if f.local_face == 2 { red } else { BG });
+    let tris = paint_triangles(&nodes, &faces, &normals, &flat, Some(&uv));
+    let img = rasterize(&tris, Some(&tex), &cam, &RenderOptions::unlit(128, 96));
+    assert!(front_face_pixels(&img)
+        .iter()
+        .all(|p| is_blend(p, BG, red) || *p == red));
+}
+
+#[test]
+fn corner_colours_are_interpolated_per_pixel() {
+    // Red at the front face's left corners, blue at its right: the colour runs smoothly
+    // from red to blue across the one quad (many shades, monotone in x).
+    let (nodes, faces) = unit_cube();
+    let (red, blue) = ([240u8, 0, 0], [0u8, 0, 240]);
+    let normals = corner_normals(&nodes, &faces, DEFAULT_CREASE_DEGREES);
+    let paint = |f: &BoundaryFace| {
+        FacePaint::Corners(f.nodes.map(|n| {
+            if nodes[n as usize][0] < 0.5 {
+                red
+            } else {
+                blue
+            }
+        }))
+    };
+    let tris = paint_triangles(&nodes, &faces, &normals, &paint, None);
+    let cam = front_camera(Projection::Orthographic);
+    let img = rasterize(&tris, None, &cam, &RenderOptions::unlit(128, 96));
+    let row: Vec<[u8; 3]> = (0..128).map(|x| img.get(x, 48)).collect();
+    let inside: Vec<[u8; 3]> = row.into_iter().filter(|p| *p != BG).collect();
+    assert!(inside.len() > 20, "{}", inside.len());
+    // away from the anti-aliased edges: red falls, blue rises, pixel by pixel
+    let core = &inside[2..inside.len() - 2];
+    for w in core.windows(2) {
+        assert!(w[1][0] <= w[0][0] && w[1][2] >= w[0][2], "{w:?}");
+    }
+    let mut shades: Vec<[u8; 3]> = core.to_vec();
+    shades.dedup();
+    assert!(shades.len() > 10, "{} shades", shades.len());
+    assert!(core[0][0] > 200 && core[core.len() - 1][2] > 200);
+    // the same bits with one worker thread and with four
+    let render_with = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| rasterize(&tris, None, &cam, &RenderOptions::new(128, 96)))
+    };
+    assert_eq!(render_with(1), render_with(4));
+}
+
+#[test]
+fn a_soft_crease_is_continuous_in_the_angle_and_a_hard_one_is_the_old_rule() {
+    let w = |deg: f64| soft_crease(deg.to_radians().cos(), 60.0, 120.0);
+    assert_eq!(w(10.0), 1.0);
+    assert_eq!(w(60.0), 1.0);
+    assert_eq!(w(130.0), 0.0);
+    assert!((w(90.0) - 0.5).abs() < 1e-12);
+    // no jump anywhere: 0.1 degree apart, the weights differ by little
+    for i in 0..1800 {
+        let a = i as f64 * 0.1;
+        assert!((w(a + 0.1) - w(a)).abs() < 0.01, "at {a} degrees");
+    }
+    // hard: 1 within, 0 beyond
+    assert_eq!(soft_crease(59f64.to_radians().cos(), 60.0, 60.0), 1.0);
+    assert_eq!(soft_crease(61f64.to_radians().cos(), 60.0, 60.0), 0.0);
+    // corner_normals is the hard crease of corner_normals_weighted, bit for bit
+    let m = block([0.0; 3], [2.0, 1.0, 1.0], [2, 2, 1]);
+    let faces = boundary_quads(&m.elements);
+    for c in [0.0, 30.0, 60.0, 89.0, 91.0, 180.0] {
+        let hard = corner_normals_weighted(&m.nodes, &faces, &|_, _, cos| soft_crease(cos, c, c));
+        assert_eq!(corner_normals(&m.nodes, &faces, c), hard, "{c}");
+    }
+    // a box's 90-degree edges: sharp with a hard 60-degree crease, half-blended with a soft
+    // one to 120 degrees
+    let soft =
+        corner_normals_weighted(&m.nodes, &faces, &|_, _, cos| soft_crease(cos, 60.0, 120.0));
+    let hard = corner_normals(&m.nodes, &faces, 60.0);
+    let f = faces.iter().position(|f| f.local_face == 2).unwrap();
+    let n = face_normal(&m.nodes, &faces[f]);
+    assert!(hard[f].iter().all(|c| dot(*c, n) > 1.0 - 1e-12));
+    assert!(soft[f].iter().any(|c| dot(*c, n) < 0.99));
 }

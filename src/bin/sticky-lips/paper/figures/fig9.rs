@@ -2,12 +2,11 @@
 //! glue) either side of the centre, at the slight opening. The wet parts separate first; the
 //! glued parts (the centre and the corners) hold for a while and then let go as well. The
 //! figure is the frame halfway between the last wet column opening and the first glued one
-//! (the last frame if no glued column opens). Saliva elements are coloured by their moisture
-//! (wet blue, gluing green).
+//! (the last frame if no glued column opens). The saliva is coloured by its moisture (wet
+//! blue, gluing green: per element, averaged at the nodes and interpolated per pixel, so a
+//! band's edge blends over one element); the lips are the CC0 lips mask sampled per pixel.
 
-use crate::paper::look::{
-    element_codes, render, skin_colours, Paint, CAVITY, GREEN, WET_BLUE, WHITE,
-};
+use crate::paper::look::{lips_texture, render, Paint, CAVITY, GREEN, SKIN, WET_BLUE, WHITE};
 use crate::paper::{Context, Output};
 use serde_json::json;
 use sticky_lips::error::Result;
@@ -23,13 +22,11 @@ pub fn produce(ctx: &Context) -> Result<Output> {
     for (k, &e) in disc.saliva.elements.iter().enumerate() {
         wet[e as usize] = disc.saliva.initial_moisture[k] > mc;
     }
-    let codes = element_codes(p);
-    let skin = skin_colours(p, ctx.lips_mask.as_ref());
-    let colour = |e: u32| match (codes[e as usize], wet[e as usize]) {
-        (2, true) => WET_BLUE,
-        (2, false) => GREEN,
-        _ => skin[e as usize],
+    let tissue = match (&p.mesh.uv, ctx.lips_mask.as_ref()) {
+        (Some(_), Some(mask)) => lips_texture(mask),
+        _ => Image::new(1, 1, SKIN),
     };
+    let saliva = |e: u32| if wet[e as usize] { WET_BLUE } else { GREEN };
     // a counted column is wet if every saliva element at its upper node is wet, glued if
     // none is (the columns on a band's edge are neither)
     let z = &run.zip;
@@ -76,7 +73,7 @@ pub fn produce(ctx: &Context) -> Result<Output> {
         cols,
         &run.displacement(frame)?,
         &run.broken(frame)?,
-        Paint::Elements(&colour),
+        Paint::TextureAndSaliva(&tissue, &saliva),
         CAVITY,
         900,
         560,
