@@ -11,6 +11,7 @@ mod fig8;
 mod fig9;
 mod load;
 mod plots;
+mod restick;
 mod study;
 mod sweep;
 mod zip;
@@ -122,6 +123,12 @@ pub const TABLE: &[Figure] = &[
         what: "what sets the zip front's speed",
         runs: |_, quick| study::names(quick),
         produce: study::produce,
+    },
+    Figure {
+        name: "restick",
+        what: "lips that stick again: open, close, open",
+        runs: |_, _| names(&["plosive"]),
+        produce: restick::produce,
     },
     Figure {
         name: "plots",
