@@ -127,7 +127,11 @@ pub const TABLE: &[Figure] = &[
     Figure {
         name: "restick",
         what: "lips that stick again: open, close, open",
-        runs: |_, _| names(&["plosive"]),
+        // the face only: on the procedural mouth the run diverges as the lips close again
+        runs: |model, _| match model {
+            Model::Face => names(&["plosive"]),
+            Model::Procedural => Vec::new(),
+        },
         produce: restick::produce,
     },
     Figure {
