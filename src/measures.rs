@@ -218,8 +218,49 @@ pub struct ZipFront {
 }
 
 impl ZipFront {
+    /// The zip front of a run with one opening from the rest at its first frame: the gap
+    /// itself is the growth.
     pub fn new(m: &RunMeasures, threshold: f64) -> ZipFront {
-        let cols = &m.columns;
+        ZipFront::of_frames(&m.columns, &m.frames, None, threshold)
+    }
+
+    /// The zip front of one opening among several (a jaw that opens, closes and opens
+    /// again): only the frames from `t0` to `t1` (s) count, and a column opens when its gap
+    /// has grown by more than `threshold` (m) over its gap at `t0`, so lips that start the
+    /// window not quite back at rest are measured from where they are. The baseline is the
+    /// last frame at or before `t0` (the first frame if none); the window runs from it to the
+    /// last frame at or before `t1`. Times stay the run's (s): subtract `t0` for times
+    /// relative to the opening's start. `final_open` and `final_open_fraction` are at the
+    /// window's last frame. `between(m, threshold, first frame's time, last frame's time)` is
+    /// [`ZipFront::new`] when the first frame's gap is zero.
+    pub fn between(m: &RunMeasures, threshold: f64, t0: f64, t1: f64) -> ZipFront {
+        // frame times are sums of dt: a key time given in the scenario matches within this
+        let eps = 1e-9 * (1.0 + t0.abs().max(t1.abs()));
+        let start = m
+            .frames
+            .iter()
+            .rposition(|f| f.time <= t0 + eps)
+            .unwrap_or(0);
+        let end = m
+            .frames
+            .iter()
+            .rposition(|f| f.time <= t1 + eps)
+            .map_or(start, |e| e.max(start) + 1)
+            .min(m.frames.len());
+        let frames = &m.frames[start..end];
+        let baseline = frames.first().map(|f| f.gap.as_slice());
+        ZipFront::of_frames(&m.columns, frames, baseline, threshold)
+    }
+
+    /// The zip front over `frames`, the growth of each column's gap measured from
+    /// `baseline` (none: from zero).
+    fn of_frames(
+        cols: &LipColumns,
+        frames: &[FrameMeasures],
+        baseline: Option<&[f64]>,
+        threshold: f64,
+    ) -> ZipFront {
+        let growth = |f: &FrameMeasures, c: usize| f.gap[c] - baseline.map_or(0.0, |b| b[c]);
         let n = cols.x.len();
         let (lo, hi) = (
             cols.x.iter().copied().fold(f64::INFINITY, f64::min),
@@ -234,8 +275,8 @@ impl ZipFront {
         let opening_time: Vec<Option<f64>> = (0..n)
             .map(|c| {
                 let mut prev: Option<(f64, f64)> = None;
-                for f in &m.frames {
-                    let g = f.gap[c];
+                for f in frames {
+                    let g = growth(f, c);
                     if g > threshold {
                         return Some(match prev {
                             Some((t0, g0)) if g > g0 => {
@@ -271,9 +312,9 @@ impl ZipFront {
             let (a, b): (Vec<f64>, Vec<f64>) = pairs.iter().copied().unzip();
             spearman(&a, &b)
         });
-        let last = m.frames.last();
+        let last = frames.last();
         let final_open: Vec<bool> = (0..n)
-            .map(|c| last.is_some_and(|f| f.gap[c] > threshold))
+            .map(|c| last.is_some_and(|f| growth(f, c) > threshold))
             .collect();
         let final_open_fraction =
             (0..n).filter(|&c| counted[c] && final_open[c]).count() as f64 / nc.max(1) as f64;
@@ -440,5 +481,64 @@ mod tests {
         assert!((z.t90.unwrap() - 0.132).abs() < 1e-12);
         assert!((z.spread().unwrap() - 0.03).abs() < 1e-12);
         assert_eq!(z.final_open_fraction, 1.0);
+    }
+    #[test]
+    fn zip_front_between_measures_each_of_two_openings() {
+        // nine columns across [-0.02, 0.02]. First opening: column c starts at
+        // 0.1 + 0.01 |c - 4| s and opens at 0.1 m/s; at 0.3 s every gap drops to a residual
+        // 0.5 mm (above the threshold: the lips are not back at rest) and holds. Second
+        // opening: column c starts at 0.45 + 0.01 |c - 4| s, the gap growing by 0.2 m/s over
+        // the residual.
+        let x: Vec<f64> = (0..9).map(|c| 0.005 * (c as f64 - 4.0)).collect();
+        let cols = LipColumns {
+            x,
+            upper: (0..9).collect(),
+            lower: (9..18).collect(),
+            center: 0.0,
+        };
+        let mut m = RunMeasures::new(cols, 1e-3);
+        let residual = 5e-4;
+        for f in 0..=70 {
+            let t = 0.01 * f as f64;
+            let gap: Vec<f64> = (0..9)
+                .map(|c| {
+                    let d = (c as f64 - 4.0).abs();
+                    if t < 0.3 - 1e-9 {
+                        (0.1 * (t - (0.1 + 0.01 * d))).max(0.0)
+                    } else {
+                        residual + (0.2 * (t - (0.45 + 0.01 * d))).max(0.0)
+                    }
+                })
+                .collect();
+            m.frames.push(FrameMeasures {
+                time: t,
+                gap,
+                open_fraction: 0.0,
+                broken: 0,
+                asymmetry: 0.0,
+            });
+        }
+        // over the whole run the second opening is invisible: every column is open already
+        let whole = ZipFront::new(&m, 2e-4);
+        assert!((whole.t90.unwrap() - 0.132).abs() < 1e-12);
+        // the first window is the first opening as `new` measures it
+        let first = ZipFront::between(&m, 2e-4, 0.0, 0.29);
+        assert_eq!(first.first.map(|f| f.1), Some(0.0));
+        assert!((first.first.unwrap().0 - 0.102).abs() < 1e-12);
+        assert!((first.spread().unwrap() - 0.03).abs() < 1e-12);
+        // the second window: growth over the gap at 0.4 s
+        let second = ZipFront::between(&m, 2e-4, 0.4, 0.7);
+        assert_eq!(second.first.map(|f| f.1), Some(0.0));
+        assert!((second.first.unwrap().0 - 0.451).abs() < 1e-12);
+        assert!((second.t10.unwrap() - 0.451).abs() < 1e-12);
+        assert!((second.t90.unwrap() - 0.481).abs() < 1e-12);
+        assert!((second.spearman.unwrap() - 1.0).abs() < 1e-12);
+        assert_eq!(second.final_open_fraction, 1.0);
+        // a window that ends before the second opening: nothing opens, nothing is open
+        let closed = ZipFront::between(&m, 2e-4, 0.3, 0.44);
+        assert!(closed.first.is_none() && closed.opening_time.iter().all(|t| t.is_none()));
+        assert_eq!(closed.final_open_fraction, 0.0);
+        // from the first frame (gap 0) to the last, `between` is `new`
+        assert_eq!(ZipFront::between(&m, 2e-4, 0.0, 0.7), whole);
     }
 }

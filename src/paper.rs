@@ -88,6 +88,18 @@ pub const WET: f64 = 110.0;
 /// profile with breaking off.
 pub const NO_BREAKING: f64 = 10.0;
 
+/// The jaw of run `plosive` and `examples/plosive.toml` ("papa"): (time s, angle rad) keys
+/// that open the jaw, hold, close it until the lips touch, hold it closed and open it again.
+pub const PLOSIVE_JAW: [[f64; 2]; 7] = [
+    [0.0, 0.0],
+    [0.3, 0.15],
+    [0.4, 0.15],
+    [0.6, 0.0],
+    [0.8, 0.0],
+    [1.1, 0.15],
+    [1.25, 0.15],
+];
+
 /// A run: its name (its directory under `OUT/runs/`) and its overrides on Table 1.
 #[derive(Clone, Debug)]
 pub struct Spec {
@@ -137,6 +149,17 @@ fn bands(edges: &[f64], values: &[f64]) -> Value {
     );
     let mut t = toml::Table::new();
     t.insert("bands".into(), Value::Table(b));
+    Value::Table(t)
+}
+
+/// The `[jaw]` table of run `plosive`: [`PLOSIVE_JAW`] as keys (replacing Table 1's shape).
+fn plosive_jaw() -> Value {
+    let keys = PLOSIVE_JAW
+        .iter()
+        .map(|k| Value::Array(vec![Value::Float(k[0]), Value::Float(k[1])]))
+        .collect();
+    let mut t = toml::Table::new();
+    t.insert("keys".into(), Value::Array(keys));
     Value::Table(t)
 }
 
@@ -212,6 +235,14 @@ pub fn all(model: Model, quick: bool) -> Vec<Spec> {
             vec![("saliva.0.k_glue", f(NO_BREAKING))],
         ),
     ];
+    v.push(make(
+        "plosive",
+        "the jaw opens, closes until the lips touch, holds and opens again (lips that stick again)",
+        vec![
+            ("jaw", plosive_jaw()),
+            ("time.total", f(PLOSIVE_JAW[PLOSIVE_JAW.len() - 1][0])),
+        ],
+    ));
     let (ks, angles) = sweep_grid(quick);
     for &a in &angles {
         for &k in &ks {

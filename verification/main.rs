@@ -11,6 +11,7 @@ mod niftysim;
 mod paper_claims;
 mod patch;
 mod precision;
+mod restick;
 mod saliva;
 mod skfem;
 mod time_integration;

@@ -174,13 +174,18 @@ impl Run {
             .collect()
     }
 
-    /// The jaw angle of the run (rad).
+    /// The jaw angle of the run (rad); for a keyed jaw (run `plosive`) its largest key.
     pub fn angle(&self) -> f64 {
         self.problem
             .bc
             .rotations
             .first()
-            .map(|r| r.angle)
+            .map(|r| match &r.curve.shape {
+                sticky_lips::problem::boundary::LoadShape::Keyed(k) => {
+                    r.angle * k.keys().iter().fold(0.0f64, |a, k| a.max(k.1))
+                }
+                _ => r.angle,
+            })
             .unwrap_or(0.0)
     }
 

@@ -12,6 +12,7 @@ mod fig8;
 mod fig9;
 mod load;
 mod plots;
+mod restick;
 mod study;
 mod sweep;
 mod zip;
@@ -129,6 +130,16 @@ pub const TABLE: &[Figure] = &[
         what: "the modelling choices the paper leaves open, one at a time: load and equilibrium opening",
         runs: choices::names,
         produce: choices::produce,
+    },
+    Figure {
+        name: "restick",
+        what: "lips that stick again: open, close, open",
+        // the face only: on the procedural mouth the run diverges as the lips close again
+        runs: |model, _| match model {
+            Model::Face => names(&["plosive"]),
+            Model::Procedural => Vec::new(),
+        },
+        produce: restick::produce,
     },
     Figure {
         name: "plots",
