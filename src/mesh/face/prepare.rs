@@ -596,6 +596,25 @@ pub fn prepare(
             ));
         }
     }
+    // a fold of a line near a corner trimmed (the loop's edges above still separate)
+    let (contour, trimmed) = match super::lips::trim_folds(&s, &contour.upper, &contour.lower) {
+        Ok(None) => (contour, None),
+        Ok(Some(t)) => (
+            Contour {
+                upper: t.upper.clone(),
+                lower: t.lower.clone(),
+                ..contour
+            },
+            Some(t),
+        ),
+        Err(what) => {
+            return Err(Error::input(
+                file,
+                Location::None,
+                format!("{what}; {}", super::lips::NAME_THE_LIPS),
+            ))
+        }
+    };
     let all = vec![true; s.quads.len()];
     let sides = topology::components(&s, &adj, &all, &ring_edges);
     // the side of the contour the lips' outer faces are on: the larger component
@@ -673,9 +692,10 @@ pub fn prepare(
                 Location::None,
                 format!(
                     "the {name} lip contour turns back on itself between vertices {} and {}: seen from the \
-                     front it must run from one mouth corner to the other",
+                     front it must run from one mouth corner to the other; {}",
                     old_of[w[0] as usize] + 1,
-                    old_of[w[1] as usize] + 1
+                    old_of[w[1] as usize] + 1,
+                    super::lips::NAME_THE_LIPS
                 ),
             ));
         }
@@ -790,6 +810,19 @@ pub fn prepare(
             if separates { "separates the mouth interior from" } else { "does not separate an interior from" }
         ),
     );
+    if let Some(t) = &trimmed {
+        notes.insert(
+            1 + usize::from(!refined.parents.is_empty()),
+            format!(
+                "the lip contour turned back on itself near the mouth corners (where the lips meet): \
+                 {} upper and {} lower vertices dropped from the lines, the furthest {:.2} mm in from \
+                 its corner",
+                t.dropped[0],
+                t.dropped[1],
+                1e3 * t.depth
+            ),
+        );
+    }
     notes.push(format!(
         "kept {} quads and {} vertices of {} quads outside the contour: centres within {:.0} mm left and right, \
          {:.0} mm below and {:.0} mm above the mouth centre and {:.0} mm behind the lips' front",
