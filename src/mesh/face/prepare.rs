@@ -446,9 +446,10 @@ pub fn find_contour(
             format!(
                 "no mouth found: no closed edge loop at least {} mm wide runs through vertices where \
                  the surface nearly touches itself (within {} mm); the lips must meet or nearly meet \
-                 along an edge loop of quads",
+                 along an edge loop of quads; {}",
                 1e3 * params.min_mouth_width,
-                1e3 * params.pinch
+                1e3 * params.pinch,
+                super::lips::NAME_THE_LIPS
             ),
         )),
     }
@@ -1204,6 +1205,116 @@ mod tests {
         );
     }
 
+    /// The synthetic head with the lips' ring vertex `i` (of 24; 12 is the right corner,
+    /// x = -25 mm, 11 the upper lip's next vertex) moved to `x` (mm).
+    fn with_lip_vertex_at(i: usize, x: f64) -> QuadSurface {
+        let mut head = synthetic_head();
+        head.vertices[8 * 24 + i][0] = x;
+        head
+    }
+
+    #[test]
+    fn a_lip_line_turning_back_next_to_a_corner_is_trimmed() {
+        // issue 33: the upper lip's first vertex after the right corner lies further in (x =
+        // -21 mm) than the next one (-21.65 mm), as where two lips meet over skewed quads; the
+        // loop turns back there, and was refused ("turns back on itself")
+        let head = with_lip_vertex_at(11, -21.0);
+        let src = prepare(
+            &PolySurface::from_quads(&head),
+            &FaceRig::default(),
+            frame_mm(),
+            &PrepareParams::default(),
+            "fold.obj",
+        )
+        .unwrap();
+        let d = &src.data;
+        let s = &src.surface;
+        let p = |v: u32| s.vertices[v as usize];
+        for line in [&d.upper_contour, &d.lower_contour] {
+            assert!(line.windows(2).all(|w| p(w[1])[0] > p(w[0])[0]));
+        }
+        assert_eq!(d.upper_contour[0], d.lower_contour[0]);
+        assert_eq!(d.upper_contour.last(), d.lower_contour.last());
+        // the moved vertex dropped from the upper line, nothing from the lower one; the
+        // corners where they were
+        assert_eq!(d.upper_contour.len(), 12);
+        assert_eq!(d.lower_contour.len(), 13);
+        assert!(d
+            .upper_contour
+            .iter()
+            .all(|&v| (p(v)[0] + 0.021).abs() > 1e-9));
+        assert!((p(d.upper_contour[0])[0] + 0.025).abs() < 1e-12);
+        assert!((p(*d.upper_contour.last().unwrap())[0] - 0.025).abs() < 1e-12);
+        assert!(
+            d.notes[1].contains("1 upper and 0 lower vertices dropped")
+                && d.notes[1].contains("4.00 mm in"),
+            "{:?}",
+            d.notes
+        );
+        // the mouth interior still cut off by the loop
+        assert!(d.notes[0].contains("separates the mouth interior"));
+        assert!(s.vertices.iter().all(|v| v[2].abs() < 1e-15));
+    }
+
+    #[test]
+    fn a_lip_line_turning_back_away_from_the_corners_is_refused_naming_the_rig_lists() {
+        // the upper lip's middle vertex (x = 0) moved beyond its neighbour at 6.5 mm: 17 mm
+        // from the nearest corner, more than 0.2 of the 50 mm width
+        let head = with_lip_vertex_at(6, 8.0);
+        let e = prepare(
+            &PolySurface::from_quads(&head),
+            &FaceRig::default(),
+            frame_mm(),
+            &PrepareParams::default(),
+            "fold.obj",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("fold.obj")
+                && e.contains("upper lip contour turns back")
+                && e.contains("17.0 mm in")
+                && e.contains("\"upper_lip\"")
+                && e.contains("\"lower_lip\""),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn the_longest_increasing_run_keeps_the_corners() {
+        use super::super::lips::{trim_folds, Trimmed};
+        let line = |xs: &[f64]| QuadSurface {
+            vertices: xs.iter().map(|&x| [x, 0.0, 0.0]).collect(),
+            uv: None,
+            quads: Vec::new(),
+            group_of_quad: Vec::new(),
+            groups: Vec::new(),
+            quad_lines: Vec::new(),
+            notes: Vec::new(),
+        };
+        // upper 0..=6, lower 0, 7, 8, 6 (shared corners 0 and 6): a fold at each end of the
+        // upper line (as on the SOMA head: -21.26, -20.77, -21.18, ...)
+        let s = line(&[
+            -21.26, -20.77, -21.18, 0.0, 21.18, 20.77, 21.26, -10.0, 10.0,
+        ]);
+        let t = trim_folds(&s, &[0, 1, 2, 3, 4, 5, 6], &[0, 7, 8, 6]).unwrap();
+        assert_eq!(
+            t,
+            Some(Trimmed {
+                upper: vec![0, 2, 3, 5, 6],
+                lower: vec![0, 7, 8, 6],
+                dropped: [2, 0],
+                // the furthest dropped: -20.77, 0.49 from its corner (21.18: 0.08)
+                depth: -20.77 - -21.26,
+            })
+        );
+        // already increasing: nothing to trim
+        assert_eq!(trim_folds(&s, &[0, 3, 6], &[0, 7, 8, 6]).unwrap(), None);
+        // a line whose only interior vertex lies beyond a corner
+        let e = trim_folds(&line(&[0.0, -1.0, 10.0]), &[0, 1, 2], &[0, 1, 2]).unwrap_err();
+        assert!(e.contains("no vertex between the mouth corners"), "{e}");
+    }
+
     #[test]
     fn a_surface_without_lips_is_refused() {
         let mut head = synthetic_head();
@@ -1221,7 +1332,7 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(
-            e.contains("flat.obj") && e.contains("no mouth found"),
+            e.contains("flat.obj") && e.contains("no mouth found") && e.contains("\"upper_lip\""),
             "{e}"
         );
         // a rig that does not fit the head
