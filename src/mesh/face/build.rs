@@ -107,7 +107,10 @@ pub struct FaceParams {
     pub commissure: f64,
     /// The modiolus: nodes (both layers) within this distance (m, in the front view) of a
     /// point `modiolus_lateral` beyond each mouth corner, at the corner's height, are held
-    /// with the skull. 0: none.
+    /// with the skull, except those the jaw moves. 0: none. The default (5 mm, 10 mm beyond
+    /// the corners) holds the corners of the mouth where the face's muscles meet in the
+    /// modiolus, a fibromuscular node lateral to each angle of the mouth (paper/README.md,
+    /// "The model chosen").
     pub modiolus_radius: f64,
     /// How far beyond each mouth corner the modiolus lies (m).
     pub modiolus_lateral: f64,
@@ -164,7 +167,7 @@ impl Default for FaceParams {
             saliva_thickness: SalivaThickness::Rule(ThicknessRule::Median),
             min_saliva_gap: 0.0003,
             commissure: 0.0,
-            modiolus_radius: 0.0,
+            modiolus_radius: 0.005,
             modiolus_lateral: 0.010,
             vestibule: 0.0,
             hinge_offset: [0.0; 3],
@@ -948,9 +951,10 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
         let mut held = 0;
         for v in 0..nv {
             let x = surface.vertices[v as usize];
-            if centres
-                .iter()
-                .any(|c| (x[0] - c[0]).hypot(x[1] - c[1]) <= p.modiolus_radius)
+            if jaw.binary_search(&v).is_err()
+                && centres
+                    .iter()
+                    .any(|c| (x[0] - c[0]).hypot(x[1] - c[1]) <= p.modiolus_radius)
             {
                 skull.extend([v, v + nv]);
                 held += 1;
@@ -1250,11 +1254,14 @@ mod tests {
     /// The modelling choices of the study: each changes what it says and nothing else.
     #[test]
     fn commissure_modiolus_vestibule_and_hinge_offset_change_what_they_say() {
-        let base = model(0.25);
+        let base = model_with(0.25, |p| p.modiolus_radius = 0.0);
         let count = |m: &FaceModel, set: &str| m.mesh.node_sets[set].len();
         let sal = |m: &FaceModel| m.mesh.element_sets["saliva"].len();
         // commissure: the saliva quads within 3 mm of a corner become tissue
-        let c = model_with(0.25, |p| p.commissure = 0.003);
+        let c = model_with(0.25, |p| {
+            p.modiolus_radius = 0.0;
+            p.commissure = 0.003;
+        });
         let (xr, xl) = (base.columns.x[0], *base.columns.x.last().unwrap());
         let near = base.mesh.element_sets["saliva"]
             .iter()
@@ -1276,7 +1283,10 @@ mod tests {
             .iter()
             .all(|n| m.mesh.node_sets["skull"].binary_search(n).is_ok()));
         // vestibule: inner-layer nodes only join the skull and the jaw
-        let v = model_with(0.25, |p| p.vestibule = 0.008);
+        let v = model_with(0.25, |p| {
+            p.modiolus_radius = 0.0;
+            p.vestibule = 0.008;
+        });
         let nv = v.inner_offset;
         for set in ["skull", "jaw"] {
             let extra: Vec<u32> = v.mesh.node_sets[set]
@@ -1288,7 +1298,10 @@ mod tests {
             assert!(extra.iter().all(|&n| n >= nv), "{set}: a front node added");
         }
         // hinge offset
-        let h = model_with(0.25, |p| p.hinge_offset = [0.0, -0.015, 0.0]);
+        let h = model_with(0.25, |p| {
+            p.modiolus_radius = 0.0;
+            p.hinge_offset = [0.0, -0.015, 0.0];
+        });
         assert!((h.jaw_hinge.0[1] - (base.jaw_hinge.0[1] - 0.015)).abs() < 1e-15);
         // refusals name the field
         let src = super::super::makehuman().unwrap();
@@ -1317,7 +1330,8 @@ mod tests {
             ),
             (
                 FaceParams {
-                    modiolus_radius: 0.05,
+                    modiolus_radius: 0.001,
+                    modiolus_lateral: 0.09,
                     resolution: 0.25,
                     ..Default::default()
                 },

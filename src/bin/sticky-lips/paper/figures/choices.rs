@@ -4,9 +4,10 @@
 //!
 //! * left, the mechanism: the load on the saliva along the mouth, `Q - 1` (paper eq. 10: the
 //!   squared stretch across the layer, minus one) of every saliva element at the last output
-//!   frame before the centre element breaks, in the run of the smallest jaw angle at which
-//!   it breaks; the number is the centre's `Q - 1` over the mean of the two elements nearest
-//!   0.8 w. The steeper the load falls from the centre to the corners, the further the
+//!   frame before the first element breaks (the centre, where the opening starts there), in
+//!   the run of the smallest jaw angle at which one breaks: the load before any element has
+//!   let go and shifted it; the number is the centre's `Q - 1` over the mean of the two
+//!   elements nearest 0.8 w. The steeper the load falls from the centre to the corners, the further the
 //!   centre can open before the corners let go;
 //! * right, the outcome: the fraction of the lip columns open at the end (1 s: the jaw has
 //!   stood still for 0.5 s) against the jaw angle. A partial opening is stable where it lies
@@ -42,10 +43,12 @@ pub fn names(model: Model, quick: bool) -> Vec<String> {
     v
 }
 
-/// The load along the mouth at the moment the centre first breaks.
+/// The load along the mouth at the last output frame before the first saliva element breaks.
 struct Load {
     angle: f64,
     time: f64,
+    /// Where the first element to break lies (|x| / w).
+    first_w: f64,
     /// `(x - centre` (m), `Q - 1)` of each saliva element, by `x`.
     profile: Vec<(f64, f64)>,
     /// The centre's `Q - 1` over that at 0.8 w.
@@ -77,7 +80,7 @@ fn saliva_by_x(run: &Run) -> Vec<(f64, u32)> {
     v
 }
 
-/// [`Load`] of one run, `None` if its centre element never breaks.
+/// [`Load`] of one run, `None` if no saliva element breaks.
 fn load(run: &Run, angle: f64) -> Result<Option<Load>> {
     let els = saliva_by_x(run);
     if els.is_empty() {
@@ -94,12 +97,13 @@ fn load(run: &Run, angle: f64) -> Result<Option<Load>> {
     let (left, right) = (nearest(-0.8 * half), nearest(0.8 * half));
     for f in 1..run.measures.frames.len() {
         let broken = run.cell_field(f, "saliva_broken")?;
-        if broken[els[centre].1 as usize] > 0.5 {
+        if let Some(first) = els.iter().position(|&(_, e)| broken[e as usize] > 0.5) {
             let q = run.cell_field(f - 1, "saliva_Q")?;
             let v: Vec<f64> = els.iter().map(|&(_, e)| q[e as usize] - 1.0).collect();
             return Ok(Some(Load {
                 angle,
                 time: run.measures.frames[f - 1].time,
+                first_w: els[first].0.abs() / half,
                 profile: els.iter().zip(&v).map(|(e, q)| (e.0, *q)).collect(),
                 ratio: v[centre] / (0.5 * (v[left] + v[right])),
             }));
@@ -156,8 +160,9 @@ fn measure(ctx: &Context, c: &Variant) -> Result<Measured> {
         "variant": c.name,
         "choice": c.choice,
         "what": c.what,
-        "load_at_first_centre_break": load_at.as_ref().map(|l| json!({
-            "angle": l.angle, "time_s": l.time, "centre_over_0.8w": l.ratio,
+        "load_before_first_break": load_at.as_ref().map(|l| json!({
+            "angle": l.angle, "time_s": l.time, "first_break_position_w": l.first_w,
+            "centre_over_0.8w": l.ratio,
         })),
         "partly_open_angles": partial,
         "c5_holds_at": c5_holds,
@@ -174,7 +179,7 @@ fn measure(ctx: &Context, c: &Variant) -> Result<Measured> {
 
 fn plot(choice: &str, group: &[&Measured]) -> Image {
     let mut left = PlotSpec::new(
-        format!("`{choice}`: load on the saliva when the centre first breaks"),
+        format!("`{choice}`: load on the saliva before the first element breaks"),
         "position along the mouth (mm)",
         "Q - 1",
     );
@@ -192,8 +197,8 @@ fn plot(choice: &str, group: &[&Measured]) -> Image {
             left.series.push(
                 Series::new(
                     format!(
-                        "{} ({} rad, {:.2} s): centre / 0.8 w = {:.2}",
-                        m.variant.name, l.angle, l.time, l.ratio
+                        "{} ({} rad, {:.2} s, first break {:.2} w): centre / 0.8 w = {:.2}",
+                        m.variant.name, l.angle, l.time, l.first_w, l.ratio
                     ),
                     l.profile.iter().map(|&(x, q)| (1e3 * x, q)).collect(),
                 )
