@@ -17,6 +17,10 @@ const MODELS: [&str; 5] = [
     "cantilever_tipdisp",
 ];
 
+/// NiftySim's f64 build against ours, final state: relative tolerances (see the assertions).
+const NIFTY_U_TOL: f64 = 1e-12;
+const NIFTY_FINT_TOL: f64 = 1e-11;
+
 fn run_model<T: SimdReal>(name: &str) -> (Simulation<T>, Vec<[f64; 3]>) {
     let p = niftysim::read(
         &oracle_dir().join(format!("{name}.xml")),
@@ -53,13 +57,17 @@ fn niftysim_f64_displacements_and_forces() {
         let du = rel_max_diff(&sim.displacement_f64(), &u_ref);
         let df = rel_max_diff(&fint, &f_ref);
         println!("{name}: U rel {du:.2e}, Fint rel {df:.2e}");
+        // Both codes run the same algorithm in f64; what differs is the order of summation and
+        // the platform's libm (the neo-Hookean's J^(-2/3)). Measured worst over the five
+        // models: U 1.7e-13, Fint 1.1e-12 (the cantilever). Asserted with a margin of about 6x
+        // and 9x: U_TOL = 1e-12, FINT_TOL = 1e-11 (the README states both levels).
         assert!(
-            du <= 1e-10,
-            "{name}: displacement differs from NiftySim f64 by {du:e} (relative)"
+            du <= NIFTY_U_TOL,
+            "{name}: displacement differs from NiftySim f64 by {du:e} (relative; tolerance {NIFTY_U_TOL:e})"
         );
         assert!(
-            df <= 1e-10,
-            "{name}: internal force differs from NiftySim f64 by {df:e} (relative)"
+            df <= NIFTY_FINT_TOL,
+            "{name}: internal force differs from NiftySim f64 by {df:e} (relative; tolerance {NIFTY_FINT_TOL:e})"
         );
     }
 }
@@ -107,9 +115,11 @@ fn niftysim_f64_masses_volumes_gradients_stress() {
             }
         }
         println!("{name}: mass {worst:.1e} V {wv:.1e} grad {wg:.1e} S {ws:.1e} E {we:.1e}");
+        // the final state's stress and strain inherit the displacements' 1e-13 through the
+        // element's gradient (|grad u| up to 0.3): measured S 7.2e-12, E smaller; 5e-11 leaves ~7x
         assert!(
-            ws < 1e-10 && we < 1e-10,
-            "{name}: stress rel {ws:e}, strain rel {we:e}"
+            ws < 5e-11 && we < 5e-11,
+            "{name}: stress rel {ws:e}, strain rel {we:e} (tolerance 5e-11)"
         );
     }
 }
@@ -164,15 +174,16 @@ fn niftysim_urand_element_forces_f64() {
             }
         }
         println!("{name} Urand f64: Fint rel {df:.2e}, S rel {ws:.2e}, E rel {we:.2e}");
-        // 1e-10: both codes evaluate the same formulas in f64 (expected ~1e-13); 1e-10 leaves room for
-        // different summation orders amplified by the conditioning of C^-1 at |grad u| ~ 0.3
+        // One evaluation of the same formulas in f64 (no time stepping): measured Fint 7.9e-16,
+        // S 2.6e-14 (C^-1 at |grad u| ~ 0.3 amplifies round-off), E 2.1e-15. Asserted about 10x
+        // above: Fint 1e-14, S 2e-13, E 2e-14.
         assert!(
-            df <= 1e-10,
-            "{name}: Urand internal force differs from NiftySim f64 by {df:e}"
+            df <= 1e-14,
+            "{name}: Urand internal force differs from NiftySim f64 by {df:e} (tolerance 1e-14)"
         );
         assert!(
-            ws <= 1e-10 && we <= 1e-10,
-            "{name}: Urand stress {ws:e} / strain {we:e} differ from NiftySim f64"
+            ws <= 2e-13 && we <= 2e-14,
+            "{name}: Urand stress {ws:e} / strain {we:e} differ from NiftySim f64 (tolerances 2e-13, 2e-14)"
         );
     }
 }
