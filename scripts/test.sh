@@ -25,6 +25,30 @@ T0=$(date +%s)
 # each phase prints the seconds since the script started (CI keeps only the log)
 step() { printf '\n==> [%4ds] %s\n' "$(($(date +%s) - T0))" "$*"; }
 
+# Python first, before half an hour of building: both environments are made from PYTHON
+# (default python3), which must be CPython 3.11: the animation checks' environment
+# (.venv-anim) needs bpy 5.0.1 (Blender as a Python module), published for CPython 3.11 only
+# (the main .venv alone would do with 3.10 or later).
+PYTHON=${PYTHON:-python3}
+step "Python: $PYTHON"
+if ! PYVER=$("$PYTHON" -c 'import sys; print("%d.%d" % sys.version_info[:2])' 2>/dev/null); then
+  echo "scripts/test.sh: no Python interpreter '$PYTHON' (set PYTHON=/path/to/python3.11)" >&2
+  exit 1
+fi
+case "$PYVER" in
+  3.11) echo "CPython $PYVER" ;;
+  *)
+    echo "scripts/test.sh: $PYTHON is Python $PYVER; the test command needs CPython 3.11 (bpy 5.0.1," >&2
+    echo "used to read the animation files back in Blender, exists for CPython 3.11 only)." >&2
+    echo "Install Python 3.11 and run: PYTHON=/path/to/python3.11 bash scripts/test.sh" >&2
+    exit 1
+    ;;
+esac
+if ! "$PYTHON" -c 'import venv, ensurepip' 2>/dev/null; then
+  echo "scripts/test.sh: $PYTHON has no venv/ensurepip module (Debian: apt-get install python3.11-venv)" >&2
+  exit 1
+fi
+
 if [ "${CI:-}" = "true" ]; then
   step "GPU on the CPU: lavapipe (CI=true)"
   if ! ls /usr/share/vulkan/icd.d/lvp_icd*.json >/dev/null 2>&1; then
@@ -42,7 +66,7 @@ fi
 
 step "Python environment (.venv)"
 if [ ! -x .venv/bin/python ]; then
-  python3 -m venv .venv
+  "$PYTHON" -m venv .venv
 fi
 .venv/bin/python -m pip install --quiet --disable-pip-version-check -r scripts/requirements.txt
 PY="$ROOT/.venv/bin/python"
@@ -77,8 +101,24 @@ OUT="$ROOT/target/test-outputs"
 rm -rf "$OUT"
 # verification/paper_claims.rs runs the coarse face's claim runs through the driver into the
 # `paper --quick` directory below, whose --reuse then takes them instead of repeating them
-STICKY_LIPS_PAPER_RUNS="$OUT/paper-quick/runs" cargo test --all-targets
+# verification/gpu.rs writes one line per GPU test (ran on ADAPTER / skipped: WHY) here: the
+# harness captures a test's own output, so the count is printed from this file instead
+GPU_REPORT="$OUT/gpu-tests.txt"
+mkdir -p "$OUT"
+STICKY_LIPS_GPU_REPORT="$GPU_REPORT" STICKY_LIPS_PAPER_RUNS="$OUT/paper-quick/runs" cargo test --all-targets
 cargo test --doc
+gpu_ran=$(grep -c '^ran ' "$GPU_REPORT" 2>/dev/null || true)
+gpu_skipped=$(grep -c '^skipped ' "$GPU_REPORT" 2>/dev/null || true)
+printf '\n*** GPU tests (verification/gpu.rs): %s ran, %s skipped ***\n' "${gpu_ran:-0}" "${gpu_skipped:-0}"
+grep '^ran ' "$GPU_REPORT" 2>/dev/null | sed 's/^ran [^ ]* on /    adapter: /' | sort | uniq -c || true
+grep -E '^(skipped|partial) ' "$GPU_REPORT" 2>/dev/null | sed 's/^/    /' || true
+if [ "${gpu_ran:-0}" = 0 ]; then
+  printf '*** SKIPPED: no GPU test ran (no wgpu adapter). Install a Vulkan driver (Debian: mesa-vulkan-drivers libvulkan1) and set WGPU_BACKEND=vulkan; CI=true does both ***\n\n'
+fi
+if [ "${STICKY_LIPS_REQUIRE_GPU:-}" = "1" ] && { [ "${gpu_ran:-0}" = 0 ] || [ "${gpu_skipped:-0}" != 0 ]; }; then
+  echo "STICKY_LIPS_REQUIRE_GPU=1 but not every GPU test ran" >&2
+  exit 1
+fi
 
 step "CLI runs, outputs checked with meshio"
 # the binary `cargo test --all-targets` built (test profile: optimised, debug assertions on),
@@ -150,7 +190,7 @@ test -s "$OUT/paper-procedural/fig4_opening_over_time.png"
 
 step "animation files: the default job, a user's head through \`face\`, the procedural mouth; read by usd-core and Blender"
 if [ ! -x .venv-anim/bin/python ]; then
-  python3 -m venv .venv-anim
+  "$PYTHON" -m venv .venv-anim
 fi
 .venv-anim/bin/python -m pip install --quiet --disable-pip-version-check -r scripts/requirements-anim.txt
 # the README's first command, through the test build: `sticky-lips run` with no input

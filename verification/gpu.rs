@@ -8,6 +8,8 @@
 //!
 //! Without an adapter every test here prints `SKIPPED` and passes; with
 //! `STICKY_LIPS_REQUIRE_GPU=1` (set in CI, where lavapipe is installed) it fails instead.
+//! Each test writes whether it ran, and on which adapter, to the file named by
+//! `STICKY_LIPS_GPU_REPORT`; `scripts/test.sh` prints the count from it (`report`).
 
 use crate::common::*;
 use rand::{Rng, SeedableRng};
@@ -24,17 +26,40 @@ use sticky_lips::tled::element_forces::element_force;
 use sticky_lips::tled::Simulation;
 use sticky_lips::{Problem, Real};
 
+/// Appends one line to the file `STICKY_LIPS_GPU_REPORT` names (where set): `ran TEST on
+/// ADAPTER`, `skipped TEST: WHY` or `partial TEST: WHY`. The test harness captures what a test
+/// prints, so a skip would otherwise show as a plain `ok`; `scripts/test.sh` reads the file
+/// after `cargo test` and prints how many GPU tests ran, on which adapter, or why they did not.
+fn report(line: &str) {
+    use std::io::Write;
+    let Some(path) = std::env::var_os("STICKY_LIPS_GPU_REPORT") else {
+        return;
+    };
+    // one write of a whole line to a file opened for appending: the tests run on parallel
+    // threads, and each line arrives whole
+    let mut f = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&path)
+        .unwrap_or_else(|e| panic!("STICKY_LIPS_GPU_REPORT {}: {e}", path.to_string_lossy()));
+    f.write_all(format!("{line}\n").as_bytes())
+        .unwrap_or_else(|e| panic!("STICKY_LIPS_GPU_REPORT {}: {e}", path.to_string_lossy()));
+}
+
 /// A device, or `None` after a loud message (a failure with `STICKY_LIPS_REQUIRE_GPU=1`).
 fn adapter(test: &str) -> Option<GpuContext> {
     match GpuContext::new() {
         Ok(c) => {
             println!("{test}: adapter {}", c.describe());
+            report(&format!("ran {test} on {}", c.describe()));
             Some(c)
         }
         Err(e) => {
             if std::env::var("STICKY_LIPS_REQUIRE_GPU").is_ok_and(|v| v == "1") {
+                report(&format!("failed {test}: no adapter: {e}"));
                 panic!("{test}: STICKY_LIPS_REQUIRE_GPU=1 and {e}");
             }
+            report(&format!("skipped {test}: {e}"));
             eprintln!(
                 "SKIPPED {test}: {e}. Install a Vulkan driver (lavapipe: mesa-vulkan-drivers) \
                  and set WGPU_BACKEND=vulkan; STICKY_LIPS_REQUIRE_GPU=1 turns this into a failure"
@@ -682,6 +707,10 @@ fn gpu_f64_follows_cpu_f64_on_niftysim_models() {
             "gpu_f64_follows_cpu_f64_on_niftysim_models: {} has no SHADER_F64; nothing to compare",
             probe.describe()
         );
+        report(&format!(
+            "partial gpu_f64_follows_cpu_f64_on_niftysim_models: {} has no SHADER_F64, no f64 run compared",
+            probe.describe()
+        ));
         return;
     }
     for name in ORACLE {
