@@ -413,7 +413,8 @@ fn oversized_endless_and_non_finite_inputs_are_refused() {
 }
 
 /// The command line refuses `--threads 0`, a non-finite blend weight, a blend shape with a
-/// non-finite displacement and an extrusion thickness that is a unit mistake.
+/// non-finite displacement, an extrusion thickness that is a unit mistake and a temperature
+/// at absolute zero, and takes a negative temperature above it.
 #[test]
 fn command_line_values_are_checked() {
     use std::process::Command;
@@ -441,6 +442,18 @@ fn command_line_values_are_checked() {
         );
     };
     let c = case.to_str().unwrap();
+    // a temperature below 0 C is a value, not an option; below absolute zero it is refused
+    let o = Command::new(bin)
+        .args(["evaporation", "--ambient", "-5", "--json"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["inputs"]["p_eq_Pa"].as_f64().unwrap() > 0.0);
+    fails(
+        &["evaporation", "--temperature", "-273.15"],
+        "error: invalid value '-273.15' for '--temperature",
+    );
     fails(
         &[
             "run",
@@ -832,7 +845,10 @@ fn a_sweep_expands_into_runs_and_a_job_list() {
     let final_of = |n: &str| std::fs::read(runs.join(n).join("final.vtu")).unwrap();
     assert_ne!(final_of(names[0]), final_of(names[1]));
     assert_ne!(final_of(names[0]), final_of(names[2]));
-    // each run is an ordinary run: its job line, run again elsewhere, gives the same frames
+    // each run is an ordinary run: its scenario, run again elsewhere, gives the same frames.
+    // (The cantilever is smaller than one work chunk, so the 2 threads here cannot change
+    // anything; that the thread count never changes the bits is tested on the full face,
+    // with 1 to 7 threads, in `determinism.rs`.)
     let again = dir.join("again");
     let o = Command::new(bin)
         .args([

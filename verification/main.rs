@@ -2,6 +2,7 @@
 //! The catalogue (claim, paper equation, tolerance and why) is `verification/README.md`.
 
 mod common;
+mod determinism;
 mod element;
 #[cfg(feature = "gpu")]
 mod gpu;
