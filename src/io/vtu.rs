@@ -165,104 +165,15 @@ fn xml_attr(s: &str) -> String {
 }
 
 // ---------------------------------------------------------------------------
-// base64 (RFC 4648, standard alphabet, with '=' padding), streaming
+// base64 (RFC 4648, standard alphabet, with '=' padding): the `base64` crate
 // ---------------------------------------------------------------------------
 
-const B64: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-
-#[inline]
-fn encode_triple(b: [u8; 3], out: &mut Vec<u8>) {
-    let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
-    out.extend_from_slice(&[
-        B64[(n >> 18) as usize & 63],
-        B64[(n >> 12) as usize & 63],
-        B64[(n >> 6) as usize & 63],
-        B64[n as usize & 63],
-    ]);
-}
-
-/// Streaming base64 encoder writing into a `dyn Write`, buffering its output.
-struct Base64Writer<'w> {
-    out: &'w mut dyn Write,
-    pending: [u8; 3],
-    npending: usize,
-    buf: Vec<u8>,
-}
-
-impl<'w> Base64Writer<'w> {
-    const FLUSH_AT: usize = 1 << 15;
-
-    fn new(out: &'w mut dyn Write) -> Self {
-        Base64Writer {
-            out,
-            pending: [0; 3],
-            npending: 0,
-            buf: Vec::with_capacity(Self::FLUSH_AT + 8),
-        }
-    }
-
-    fn push(&mut self, mut bytes: &[u8]) -> io::Result<()> {
-        // complete a pending partial triple first
-        while self.npending > 0 && self.npending < 3 && !bytes.is_empty() {
-            self.pending[self.npending] = bytes[0];
-            self.npending += 1;
-            bytes = &bytes[1..];
-        }
-        if self.npending == 3 {
-            encode_triple(self.pending, &mut self.buf);
-            self.npending = 0;
-        }
-        let mut chunks = bytes.chunks_exact(3);
-        for c in &mut chunks {
-            encode_triple([c[0], c[1], c[2]], &mut self.buf);
-            if self.buf.len() >= Self::FLUSH_AT {
-                self.out.write_all(&self.buf)?;
-                self.buf.clear();
-            }
-        }
-        for &b in chunks.remainder() {
-            self.pending[self.npending] = b;
-            self.npending += 1;
-        }
-        Ok(())
-    }
-
-    fn finish(mut self) -> io::Result<()> {
-        match self.npending {
-            0 => {}
-            1 => {
-                let n = u32::from(self.pending[0]) << 16;
-                self.buf.extend_from_slice(&[
-                    B64[(n >> 18) as usize & 63],
-                    B64[(n >> 12) as usize & 63],
-                    b'=',
-                    b'=',
-                ]);
-            }
-            2 => {
-                let n = (u32::from(self.pending[0]) << 16) | (u32::from(self.pending[1]) << 8);
-                self.buf.extend_from_slice(&[
-                    B64[(n >> 18) as usize & 63],
-                    B64[(n >> 12) as usize & 63],
-                    B64[(n >> 6) as usize & 63],
-                    b'=',
-                ]);
-            }
-            _ => unreachable!(),
-        }
-        self.out.write_all(&self.buf)
-    }
-}
+use base64::engine::general_purpose::STANDARD as BASE64;
+use base64::Engine as _;
 
 /// Base64 (RFC 4648, padded) of `bytes`.
 pub fn base64_encode(bytes: &[u8]) -> String {
-    let mut out = Vec::with_capacity(bytes.len().div_ceil(3) * 4);
-    {
-        let mut enc = Base64Writer::new(&mut out);
-        enc.push(bytes).expect("writing to Vec cannot fail");
-        enc.finish().expect("writing to Vec cannot fail");
-    }
-    String::from_utf8(out).expect("base64 output is ASCII")
+    BASE64.encode(bytes)
 }
 
 /// Write one binary block `base64([u64 LE byte count][payload])`, where the
@@ -276,8 +187,10 @@ fn write_block(
 ) -> io::Result<()> {
     const CHUNK: usize = 3 * 1024; // values per staging chunk
     let nbytes = (n_values * size) as u64;
-    let mut enc = Base64Writer::new(w);
-    enc.push(&nbytes.to_le_bytes())?;
+    // one base64 stream over the count and the payload; the encoder buffers its output
+    let mut enc =
+        base64::write::EncoderWriter::new(io::BufWriter::with_capacity(1 << 15, w), &BASE64);
+    enc.write_all(&nbytes.to_le_bytes())?;
     let mut scratch = Vec::with_capacity(CHUNK * size);
     let mut start = 0;
     while start < n_values {
@@ -285,10 +198,11 @@ fn write_block(
         scratch.clear();
         fill(start, end, &mut scratch);
         debug_assert_eq!(scratch.len(), (end - start) * size);
-        enc.push(&scratch)?;
+        enc.write_all(&scratch)?;
         start = end;
     }
-    enc.finish()
+    let mut inner = enc.finish()?;
+    inner.flush()
 }
 
 fn write_f64_block(w: &mut dyn Write, data: &[f64]) -> io::Result<()> {
@@ -483,37 +397,11 @@ pub fn write_pvd(path: &Path, entries: &[PvdEntry]) -> io::Result<()> {
     write_atomic(path, s.as_bytes())
 }
 
-/// Decodes standard base64 (RFC 4648, with padding); `None` on malformed input.
+/// Decodes standard base64 (RFC 4648, with padding; ASCII whitespace between the characters
+/// is skipped, as XML readers allow); `None` on malformed input.
 pub fn base64_decode(text: &str) -> Option<Vec<u8>> {
-    fn val(c: u8) -> Option<u32> {
-        Some(match c {
-            b'A'..=b'Z' => (c - b'A') as u32,
-            b'a'..=b'z' => (c - b'a' + 26) as u32,
-            b'0'..=b'9' => (c - b'0' + 52) as u32,
-            b'+' => 62,
-            b'/' => 63,
-            _ => return None,
-        })
-    }
     let bytes: Vec<u8> = text.bytes().filter(|c| !c.is_ascii_whitespace()).collect();
-    if bytes.len() % 4 != 0 {
-        return None;
-    }
-    let mut out = Vec::with_capacity(bytes.len() / 4 * 3);
-    for chunk in bytes.chunks(4) {
-        let pad = chunk.iter().rev().take_while(|&&c| c == b'=').count();
-        if pad > 2 {
-            return None;
-        }
-        let mut n = 0u32;
-        for (i, &c) in chunk.iter().enumerate() {
-            let v = if i >= 4 - pad { 0 } else { val(c)? };
-            n = (n << 6) | v;
-        }
-        let b = [(n >> 16) as u8, (n >> 8) as u8, n as u8];
-        out.extend_from_slice(&b[..3 - pad]);
-    }
-    Some(out)
+    BASE64.decode(bytes).ok()
 }
 
 /// Reads a Float64 point-data array of one of our own `.vtu` files (inline binary,
@@ -688,14 +576,12 @@ mod tests {
             .collect();
         let oneshot = base64_encode(&data);
         for split in [1usize, 2, 4, 5, 7, 3000, 50_001] {
-            let mut out = Vec::new();
-            {
-                let mut enc = Base64Writer::new(&mut out);
-                for c in data.chunks(split) {
-                    enc.push(c).unwrap();
-                }
-                enc.finish().unwrap();
+            // the writer `write_block` uses, fed in pieces of every size
+            let mut enc = base64::write::EncoderWriter::new(Vec::new(), &BASE64);
+            for c in data.chunks(split) {
+                enc.write_all(c).unwrap();
             }
+            let out = enc.finish().unwrap();
             assert_eq!(String::from_utf8(out).unwrap(), oneshot, "split {split}");
         }
         assert_eq!(b64_decode(&oneshot), data);

@@ -14,12 +14,18 @@ pub const BYTES_PER_ELEMENT: u128 = 1600;
 /// Bytes a run holds per node.
 pub const BYTES_PER_NODE: u128 = 700;
 
-/// The memory the kernel says is available (`MemAvailable` of `/proc/meminfo`), if known.
+/// The memory the operating system says is available to a new allocation, if known: through
+/// the `sysinfo` crate, on Linux (`MemAvailable`, and the free part of the process's cgroup
+/// limit where that is smaller), macOS (`host_statistics64`) and Windows
+/// (`GlobalMemoryStatusEx`). `None` where the platform reports nothing.
 pub fn available_bytes() -> Option<u128> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: u128 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
+    let mut sys = sysinfo::System::new().ok()?;
+    sys.refresh_memory_specifics(sysinfo::MemoryRefreshKind::nothing().with_ram());
+    let mut have = sys.available_memory();
+    if let Some(cg) = sys.cgroup_limits() {
+        have = have.min(cg.free_memory);
+    }
+    (have > 0).then_some(have as u128)
 }
 
 /// The estimate for `nodes` nodes and `elements` hexahedra (bytes).

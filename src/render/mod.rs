@@ -452,30 +452,37 @@ pub fn decode_png(bytes: &[u8]) -> std::result::Result<Image, String> {
     })
 }
 
-/// Decodes a baseline or progressive JPEG (greyscale, RGB or CMYK) to RGB, with the
-/// `jpeg-decoder` crate (the MakeHuman textures are JPEG).
+/// Decodes a baseline or progressive JPEG (greyscale, RGB, YCbCr or CMYK) to RGB, with the
+/// `zune-jpeg` crate (the MakeHuman textures are JPEG).
 pub fn decode_jpeg(bytes: &[u8]) -> std::result::Result<Image, String> {
-    let mut dec = jpeg_decoder::Decoder::new(std::io::Cursor::new(bytes));
+    use zune_jpeg::zune_core::bytestream::ZCursor;
+    use zune_jpeg::zune_core::colorspace::ColorSpace;
+    use zune_jpeg::zune_core::options::DecoderOptions;
+    // greyscale stays one channel (expanded below); everything else is converted to RGB
+    let mut probe = zune_jpeg::JpegDecoder::new(ZCursor::new(bytes));
+    probe.decode_headers().map_err(|e| e.to_string())?;
+    let grey = probe.input_colorspace() == Some(ColorSpace::Luma);
+    let out = if grey {
+        ColorSpace::Luma
+    } else {
+        ColorSpace::RGB
+    };
+    let opts = DecoderOptions::default().jpeg_set_out_colorspace(out);
+    let mut dec = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(bytes), opts);
     let pixels = dec.decode().map_err(|e| e.to_string())?;
-    let info = dec
-        .info()
+    let (w, h) = dec
+        .dimensions()
         .ok_or_else(|| "JPEG without a frame header".to_string())?;
-    let (w, h) = (info.width as u32, info.height as u32);
+    let (w, h) = (w as u32, h as u32);
     let n = w as usize * h as usize;
-    let rgb: Vec<u8> = match info.pixel_format {
-        jpeg_decoder::PixelFormat::L8 => pixels.iter().flat_map(|&g| [g, g, g]).collect(),
-        jpeg_decoder::PixelFormat::L16 => pixels
-            .chunks_exact(2)
-            .flat_map(|c| [c[0], c[0], c[0]])
-            .collect(),
-        jpeg_decoder::PixelFormat::RGB24 => pixels,
-        jpeg_decoder::PixelFormat::CMYK32 => pixels
-            .chunks_exact(4)
-            .flat_map(|c| {
-                let k = 255 - c[3] as u32;
-                [c[0], c[1], c[2]].map(|v| ((255 - v as u32) * k / 255) as u8)
-            })
-            .collect(),
+    let rgb: Vec<u8> = match dec.output_colorspace() {
+        Some(ColorSpace::Luma) => pixels.iter().flat_map(|&g| [g, g, g]).collect(),
+        Some(ColorSpace::RGB) => pixels,
+        other => {
+            return Err(format!(
+                "JPEG decoded to an unexpected colour space {other:?}"
+            ))
+        }
     };
     if rgb.len() != 3 * n {
         return Err(format!(
