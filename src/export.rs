@@ -76,6 +76,35 @@ pub fn read_pvd(dir: &Path) -> Result<Vec<(f64, String)>> {
     Ok(out)
 }
 
+/// The skin mapping of `skin` at the frames of `dir` (`frames.pvd`), as JSON, for checking
+/// the animation files against the frames outside this crate (`scripts/check_animation.py`):
+/// vertex `v` of frame `k` is `to_user(x_v + f sum_i w_i u[n_i] + (1 - f) jaw (R_k - I)(x_v - p))`
+/// ([`Skin::positions`]), with `x_v` = `rest[v]` (model frame, m), `u` the frame's nodal
+/// displacements, `R_k` the rotation by `jaw_angles[k]` about `jaw_axis` through `jaw_point`,
+/// and `to_user(p) = rows^T p / scale`.
+pub fn skin_map(skin: &Skin, dir: &Path) -> Result<serde_json::Value> {
+    let entries = read_pvd(dir)?;
+    let jaw = skin.jaw.as_ref();
+    Ok(serde_json::json!({
+        "name": skin.name,
+        "unit": skin.frame.unit,
+        "scale": skin.frame.scale,
+        "rows": skin.frame.rows,
+        "rest": skin.surface.vertices,
+        "nodes": skin.weights.iter().map(|w| w.nodes).collect::<Vec<_>>(),
+        "w": skin.weights.iter().map(|w| w.w).collect::<Vec<_>>(),
+        "f": skin.weights.iter().map(|w| w.f).collect::<Vec<_>>(),
+        "jaw": skin.weights.iter().map(|w| w.jaw).collect::<Vec<_>>(),
+        "jaw_point": jaw.map(|j| j.point),
+        "jaw_axis": jaw.map(|j| j.axis),
+        "times": entries.iter().map(|e| e.0).collect::<Vec<_>>(),
+        "jaw_angles": entries
+            .iter()
+            .map(|e| jaw.map_or(0.0, |j| j.angle * j.curve.value(e.0, true)))
+            .collect::<Vec<_>>(),
+    }))
+}
+
 /// Writes `skin.obj`, `skin.pc2`, `skin.mdd` and `skin.usda` into `dir` from its frames.
 pub fn export(skin: &Skin, dir: &Path) -> Result<ExportSummary> {
     let t0 = std::time::Instant::now();

@@ -1,5 +1,6 @@
 //! The command line's values (`--threads`, `--checkpoint-every`, `--up`, `--direction`,
-//! `--shape`, `--group`): an error or a valid value (a count >= 1, finite numbers).
+//! `--shape`, `--group`, the ranged numbers of `evaporation`): an error or a valid value (a
+//! count >= 1, finite numbers, a number inside its range).
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 use sticky_lips::io::args;
@@ -16,5 +17,11 @@ fuzz_target!(|data: &[u8]| {
     }
     if let Ok((name, w)) = args::name_value(text, "--shape", "PATH.vtu=WEIGHT") {
         assert!(!name.is_empty() && w.is_finite());
+    }
+    if let Ok(h) = args::number_in(text, (0.0, true), (1.0, true), "a fraction") {
+        assert!((0.0..=1.0).contains(&h));
+    }
+    if let Ok(t) = args::number_in(text, (-273.15, false), (1e3, true), "degrees Celsius") {
+        assert!(t > -273.15 && t <= 1e3);
     }
 });

@@ -13,6 +13,28 @@ pub fn count(text: &str, what: &str) -> std::result::Result<usize, String> {
     }
 }
 
+/// A finite number between `lo` and `hi` (each bound included where `*_inclusive`), for an
+/// option whose physical range is known (e.g. `--humidity`, a fraction of 1). `what` names
+/// the quantity and its range in the message.
+pub fn number_in(
+    text: &str,
+    (lo, lo_inclusive): (f64, bool),
+    (hi, hi_inclusive): (f64, bool),
+    what: &str,
+) -> std::result::Result<f64, String> {
+    let v: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number ({what})"))?;
+    let above = if lo_inclusive { v >= lo } else { v > lo };
+    let below = if hi_inclusive { v <= hi } else { v < hi };
+    if v.is_finite() && above && below {
+        Ok(v)
+    } else {
+        Err(format!("`{text}` is out of range: {what}"))
+    }
+}
+
 /// Three finite numbers `X,Y,Z` for the option `option` (e.g. `--up`).
 pub fn vec3(text: &str, option: &str) -> Result<[f64; 3]> {
     let bad = |m: String| Error::input("command line", Location::Field(option.into()), m);
@@ -46,6 +68,23 @@ pub fn name_value<'a>(spec: &'a str, option: &str, expected: &str) -> Result<(&'
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn numbers_in_a_range() {
+        let frac = |t: &str| number_in(t, (0.0, true), (1.0, true), "a fraction, 0 to 1");
+        assert_eq!(frac("0"), Ok(0.0));
+        assert_eq!(frac(" 1 "), Ok(1.0));
+        assert_eq!(frac("0.5"), Ok(0.5));
+        for bad in ["-0.01", "1.0001", "nan", "inf", "-inf", "x", ""] {
+            let e = frac(bad).unwrap_err();
+            assert!(e.contains("0 to 1"), "{bad}: {e}");
+        }
+        // an excluded bound
+        let kelvin = |t: &str| number_in(t, (-273.15, false), (1e3, true), "above -273.15 C");
+        assert!(kelvin("-273.15").is_err());
+        assert_eq!(kelvin("-273.1"), Ok(-273.1));
+        assert!(kelvin("1000.5").is_err());
+    }
 
     #[test]
     fn values_are_checked() {

@@ -1,5 +1,6 @@
 //! `sticky-lips`: the command line. One subcommand per variant of `Command` below (run,
-//! equilibrium, check, evaporation, mouth, face, extrude, paper, blend); `sticky-lips help
+//! equilibrium, check, evaporation, mouth, face, extrude, paper, blend, export, sweep);
+//! `sticky-lips help
 //! COMMAND` prints each one's options, and README.md shows them in use.
 
 mod paper;
@@ -136,29 +137,32 @@ enum Command {
     },
     /// Evaporation rate of the saliva film from physical inputs (paper eq. 5, Herz-Knudsen).
     Evaporation {
-        /// Sticking (evaporation) coefficient alpha, dimensionless.
-        #[arg(long, default_value_t = 1.0)]
+        /// Sticking (evaporation) coefficient alpha, dimensionless, 0 to 1.
+        #[arg(long, default_value_t = 1.0, value_parser = fraction_arg, allow_negative_numbers = true)]
         sticking: f64,
-        /// Liquid (lip surface) temperature in degrees Celsius.
-        #[arg(long, default_value_t = 34.0)]
+        /// Liquid (lip surface) temperature in degrees Celsius (above -273.15, at most 1000).
+        #[arg(long, default_value_t = 34.0, value_parser = celsius_arg, allow_negative_numbers = true)]
         temperature: f64,
-        /// Liquid pressure p_liq (Pa); default: water's saturation vapour pressure at --temperature.
-        #[arg(long)]
+        /// Liquid pressure p_liq (Pa, at least 0); default: water's saturation vapour pressure
+        /// at --temperature.
+        #[arg(long, value_parser = pressure_arg, allow_negative_numbers = true)]
         p_liq: Option<f64>,
-        /// Equilibrium pressure p_eq (Pa); default: --humidity x saturation pressure at --ambient.
-        #[arg(long)]
+        /// Equilibrium pressure p_eq (Pa, at least 0); default: --humidity x saturation
+        /// pressure at --ambient.
+        #[arg(long, value_parser = pressure_arg, allow_negative_numbers = true)]
         p_eq: Option<f64>,
-        /// Relative humidity of the air (0..1), used when --p-eq is not given.
-        #[arg(long, default_value_t = 0.5)]
+        /// Relative humidity of the air, 0 to 1, used when --p-eq is not given.
+        #[arg(long, default_value_t = 0.5, value_parser = fraction_arg, allow_negative_numbers = true)]
         humidity: f64,
-        /// Air temperature in degrees Celsius, used when --p-eq is not given.
-        #[arg(long, default_value_t = 22.0)]
+        /// Air temperature in degrees Celsius (above -273.15, at most 1000), used when --p-eq
+        /// is not given.
+        #[arg(long, default_value_t = 22.0, value_parser = celsius_arg, allow_negative_numbers = true)]
         ambient: f64,
-        /// Molar mass of the evaporating species (kg/mol); water by default.
-        #[arg(long, default_value_t = 0.018015)]
+        /// Molar mass of the evaporating species (kg/mol, above 0); water by default.
+        #[arg(long, default_value_t = 0.018015, value_parser = positive_arg, allow_negative_numbers = true)]
         molar_mass: f64,
-        /// Density of the liquid film (kg/m^3).
-        #[arg(long, default_value_t = 1000.0)]
+        /// Density of the liquid film (kg/m^3, above 0).
+        #[arg(long, default_value_t = 1000.0, value_parser = positive_arg, allow_negative_numbers = true)]
         density: f64,
         /// Print JSON instead of text.
         #[arg(long)]
@@ -186,7 +190,7 @@ enum Command {
         /// becomes n quads; texture coordinates kept).
         input: PathBuf,
         /// Rig data on the head's vertices (JSON: source, jaw_weight, hinge_point, hinge_axis,
-        /// targets), in the head's units and axes.
+        /// targets, upper_lip, lower_lip), in the head's units and axes.
         #[arg(long)]
         rig: Option<PathBuf>,
         /// Length unit of the head and the rig: m, dm, cm, mm or in; `auto`: the one in which
@@ -200,13 +204,15 @@ enum Command {
         /// The face's forward axis (out of the face) in the input, X,Y,Z; or `auto`.
         #[arg(long, default_value = "auto")]
         forward: String,
-        /// Crop parameters (TOML: half_width, below, above, min_facing, pinch, min_mouth_width; metres).
+        /// Crop parameters (TOML: half_width, below, above, behind, pinch, min_mouth_width; metres).
         #[arg(long)]
         params: Option<PathBuf>,
         /// Resolution of the model written beside the source (1: about the paper's 3414 hexahedra).
         #[arg(long, default_value_t = 1.0)]
         resolution: f64,
-        #[arg(long, default_value = "out/face")]
+        /// Output directory (default `out/model`: not `run`'s `out/face`, so that neither
+        /// overwrites the other's scenario).
+        #[arg(long, default_value = "out/model")]
         out: PathBuf,
     },
     /// Extrude a quad OBJ surface (with groups) into hexahedra, as the paper's pipeline did.
@@ -230,8 +236,9 @@ enum Command {
     /// figure's overrides and write every figure (PNG), Table 1 as used, the claims and the
     /// measured numbers (measured.json). Works from any directory.
     Paper {
-        /// Where the figures go; each run's outputs go to OUT/runs/NAME/.
-        #[arg(long, default_value = "paper/figures")]
+        /// Where the figures go; each run's outputs go to OUT/runs/NAME/. The committed
+        /// figures are remade only when named: `--out paper/figures`.
+        #[arg(long, default_value = "out/paper")]
         out: PathBuf,
         /// A coarse, short version (for CI): a quarter of the hexahedra, 0.8 s simulated.
         #[arg(long)]
@@ -283,6 +290,11 @@ enum Command {
         /// The scenario the run solved (default: the `input` of RUN_DIR/summary.json).
         #[arg(long)]
         scenario: Option<PathBuf>,
+        /// Write only the skin mapping (JSON: rest positions, weights, the jaw's angle at
+        /// each frame) to this file, for checking the animation files against the frames;
+        /// the animation files are not written.
+        #[arg(long, value_name = "FILE.json")]
+        skin_map: Option<PathBuf>,
     },
 }
 
@@ -503,7 +515,11 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             spec: &spec,
             plan_only: plan,
         })?,
-        Command::Export { run_dir, scenario } => {
+        Command::Export {
+            run_dir,
+            scenario,
+            skin_map,
+        } => {
             let input = InputArgs {
                 input: match scenario {
                     Some(s) => s,
@@ -519,6 +535,14 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                     "only mouth and face models have a skin to export",
                 ));
             };
+            if let Some(path) = skin_map {
+                let map = sticky_lips::export::skin_map(skin, &run_dir)?;
+                let text = serde_json::to_string(&map).expect("json");
+                sticky_lips::io::atomic::write_atomic(&path, text.as_bytes())
+                    .map_err(|e| sticky_lips::Error::io(&path, e))?;
+                println!("export: the skin mapping written to {}", path.display());
+                return Ok(());
+            }
             let e = sticky_lips::export::export(skin, &run_dir)?;
             preview::write(&p, &run_dir)?;
             println!(
@@ -769,6 +793,27 @@ fn all_cores(threads: Option<usize>) -> usize {
 }
 
 /// `--threads N`: at least 1.
+fn fraction_arg(s: &str) -> Result<f64, String> {
+    sticky_lips::io::args::number_in(s, (0.0, true), (1.0, true), "a fraction, 0 to 1")
+}
+
+fn celsius_arg(s: &str) -> Result<f64, String> {
+    sticky_lips::io::args::number_in(
+        s,
+        (-273.15, false),
+        (1000.0, true),
+        "degrees Celsius, above -273.15 and at most 1000",
+    )
+}
+
+fn pressure_arg(s: &str) -> Result<f64, String> {
+    sticky_lips::io::args::number_in(s, (0.0, true), (f64::MAX, true), "pascals, at least 0")
+}
+
+fn positive_arg(s: &str) -> Result<f64, String> {
+    sticky_lips::io::args::number_in(s, (0.0, false), (f64::MAX, true), "a number above 0")
+}
+
 fn threads_arg(s: &str) -> Result<usize, String> {
     sticky_lips::io::args::count(s, "thread")
 }
