@@ -1,23 +1,32 @@
 """Real clients read a sticky-lips run's animation files (src/export.rs).
 
 Usage:
-    STICKY_LIPS_ANIM_OUT=RUN_DIR[:RUN_DIR...] pytest scripts/check_animation.py
+    STICKY_LIPS_ANIM_OUT=RUN_DIR[:RUN_DIR...] [STICKY_LIPS_BIN=sticky-lips] pytest scripts/check_animation.py
 
-For every run directory:
-  * usd-core (PyPI, Pixar's USD) opens skin.usda: one time sample per frame of frames.pvd,
-    the stage's time codes per second equal to the frames' rate, and at every time code the
-    skin's points equal the PC2 and MDD samples (parsed here from their documented layouts);
-    the saliva mesh's per-face `broken` primvar equals the frames' `saliva_broken` cell data
-    (read with meshio) and its count at the last frame the summary's;
+For every run directory, at every frame of frames.pvd:
+  * the skin's positions in skin.pc2 and skin.mdd (parsed here from their documented
+    layouts; the MDD's frame times are the frames' times) are the run's frames mapped onto
+    the user's mesh: the displacements of each frame's VTU (read with meshio), carried to the
+    mesh's vertices by the skin mapping that `sticky-lips export RUN --skin-map` writes
+    (bilinear weights on four model nodes, the jaw's rigid rotation for the vertices beside
+    the model, the user's units and axes), computed here in NumPy, to 1e-6 m;
+  * usd-core (PyPI, Pixar's USD) opens skin.usda: one time sample per frame, the stage's
+    time codes per second equal to the frames' rate, the points at every time code the
+    PC2's; the saliva mesh's per-face primvars `broken` and `moisture` equal the frames'
+    `saliva_broken` and `saliva_moisture` cell data, and the broken count at the last frame
+    the summary's;
   * Blender (PyPI `bpy`, headless, in its own process: scripts/blender_read_caches.py)
-    imports skin.obj with a Mesh Cache modifier on skin.pc2, and skin.usda with its USD
-    importer; at a middle frame both give the PC2's positions to 1e-6 m, and the imported
-    rest mesh is skin.obj's;
+    imports skin.obj with a Mesh Cache modifier on skin.pc2, again with one on skin.mdd, and
+    skin.usda with its USD importer; all three give the PC2's positions to 1e-6 m at every
+    frame, and the imported rest mesh is skin.obj's;
   * where the skin is the model's own surface (the procedural mouth: summary
     export.json's `skin_is_model`), the PC2's positions are the frame's VTU points to 1e-6 m;
   * where the run directory holds `input.obj` (the user's mesh the face was made from, as
     the test command copies it), skin.obj's vertices are its vertices, in its order and
-    units, to 1e-6 of its size.
+    units, to 1e-6 of its size;
+  * where the run measured the lips, they unzip as claimed (the first column to open within
+    0.2 of the half-width w of the centre, every column open at the end, Spearman rank
+    correlation of opening time with |x| at least 0.6: the paper's claims C2 and C4).
 """
 
 from __future__ import annotations
@@ -37,6 +46,43 @@ from pxr import Usd, UsdGeom
 
 TOL_M = 1e-6
 HERE = Path(__file__).resolve().parent
+
+
+def sticky_lips_bin():
+    b = os.environ.get("STICKY_LIPS_BIN") or str(HERE.parent / "target" / "debug" / "sticky-lips")
+    if not Path(b).is_file():
+        pytest.fail(f"no sticky-lips binary at {b} (set STICKY_LIPS_BIN)")
+    return b
+
+
+def rotation(axis, angle):
+    """Rodrigues' rotation matrix (src/linalg.rs rotation_matrix)."""
+    x, y, z = axis
+    c, s = np.cos(angle), np.sin(angle)
+    t = 1.0 - c
+    return np.array([[c + x * x * t, x * y * t - z * s, x * z * t + y * s],
+                     [y * x * t + z * s, c + y * y * t, y * z * t - x * s],
+                     [z * x * t - y * s, z * y * t + x * s, c + z * z * t]])
+
+
+def skin_positions(m, u, k):
+    """The skin's vertices (user's units and axes) for nodal displacements `u` (m) at frame `k`
+    of the skin map `m` (src/mesh/skin.rs Skin::positions, written again here)."""
+    rest = np.asarray(m["rest"], dtype=np.float64)
+    nodes = np.asarray(m["nodes"], dtype=np.int64)
+    w = np.asarray(m["w"], dtype=np.float64)
+    f = np.asarray(m["f"], dtype=np.float64)
+    d = f[:, None] * np.einsum("vi,vik->vk", w, u[nodes])
+    d[f <= 0.0] = 0.0
+    if m["jaw_point"] is not None:
+        g = (1.0 - f) * np.asarray(m["jaw"], dtype=np.float64)
+        p = np.asarray(m["jaw_point"])
+        r = rotation(m["jaw_axis"], m["jaw_angles"][k])
+        rel = rest - p
+        dj = rel @ r.T - rel
+        d += np.where(g[:, None] > 0.0, g[:, None] * dj, 0.0)
+    rows = np.asarray(m["rows"], dtype=np.float64)
+    return (rest + d) @ rows / m["scale"]
 
 
 def run_dirs():
@@ -127,33 +173,67 @@ def test_usd_saliva_state_is_the_frames(run):
     frames = frames_of(d)
     n_faces = len(mesh.GetFaceVertexCountsAttr().Get())
     assert n_faces == summary["saliva_elements"] == summary["export"]["saliva_faces"]
-    for k in (0, len(frames) // 2, len(frames) - 1):
-        cells = meshio.read(d / frames[k][1]).cell_data["saliva_broken"][0]
-        want = cells[cells >= 0].astype(np.float64)
+    moisture = UsdGeom.PrimvarsAPI(mesh).GetPrimvar("moisture")
+    assert moisture.GetInterpolation() == UsdGeom.Tokens.uniform
+    for k in range(len(frames)):
+        cd = meshio.read(d / frames[k][1]).cell_data
+        cells = cd["saliva_broken"][0]
+        saliva = cells >= 0
+        want = cells[saliva].astype(np.float64)
         got = np.array(broken.Get(Usd.TimeCode(k)), dtype=np.float64)
-        np.testing.assert_array_equal(got, want)
+        np.testing.assert_array_equal(got, want, err_msg=f"broken, frame {k}")
+        want_m = cd["saliva_moisture"][0][saliva].astype(np.float32)
+        got_m = np.array(moisture.Get(Usd.TimeCode(k)), dtype=np.float32)
+        np.testing.assert_array_equal(got_m, want_m, err_msg=f"moisture, frame {k}")
     assert int(np.sum(broken.Get(Usd.TimeCode(len(frames) - 1)))) == summary["broken_saliva"][-1]
 
 
-def test_blender_plays_the_pc2_and_the_usd(run, tmp_path):
+def test_every_frame_is_the_run_through_the_skin_map(run, tmp_path):
+    d, _ = run
+    path = tmp_path / "skin_map.json"
+    subprocess.run([sticky_lips_bin(), "export", str(d), "--skin-map", str(path)],
+                   check=True, stdout=subprocess.DEVNULL)
+    m = json.loads(path.read_text())
+    frames = frames_of(d)
+    assert m["times"] == [t for t, _ in frames]
+    pc2 = read_pc2(d / "skin.pc2")
+    _, mdd = read_mdd(d / "skin.mdd")
+    assert pc2.shape[0] == len(frames) and pc2.shape[1] == len(m["rest"])
+    mpu = {"m": 1.0, "dm": 0.1, "cm": 0.01, "mm": 0.001, "in": 0.0254}[m["unit"]]
+    assert abs(mpu - m["scale"]) <= 1e-12 * mpu
+    moved = 0.0
+    for k, (_, file) in enumerate(frames):
+        u = np.asarray(meshio.read(d / file).point_data["displacement"], dtype=np.float64)
+        want = skin_positions(m, u, k)
+        for name, got in (("pc2", pc2[k]), ("mdd", mdd[k])):
+            err = np.max(np.abs(got - want)) * mpu
+            assert err <= TOL_M, f"{name} frame {k} ({file}): {err:.3e} m from the frame"
+        moved = max(moved, np.max(np.abs(want - skin_positions(m, np.zeros_like(u), 0))) * mpu)
+    # the frames move the skin: the check compares motion, not the rest state with itself
+    assert moved > 1e-3, f"the skin moves by at most {moved:.3e} m"
+
+
+def test_blender_plays_the_pc2_the_mdd_and_the_usd(run, tmp_path):
     d, _ = run
     pc2 = read_pc2(d / "skin.pc2")
-    k = pc2.shape[0] // 2
-    out = tmp_path / "blender.json"
-    subprocess.run([sys.executable, str(HERE / "blender_read_caches.py"), str(d), str(k), str(out)],
+    out = tmp_path / "blender.npz"
+    subprocess.run([sys.executable, str(HERE / "blender_read_caches.py"), str(d), str(out)],
                    check=True, stdout=subprocess.DEVNULL)
-    b = json.loads(out.read_text())
+    b = np.load(out)
+    info = json.loads(str(b["info"]))
     stage = Usd.Stage.Open(str(d / "skin.usda"))
     mpu = UsdGeom.GetStageMetersPerUnit(stage)
     rest = read_obj_vertices(d / "skin.obj")
-    assert np.max(np.abs(np.array(b["rest"]) - rest)) * mpu <= TOL_M
-    for name in ("pc2", "usd"):
-        got = np.array(b[name])
-        assert got.shape == pc2[k].shape, name
-        err = np.max(np.abs(got - pc2[k])) * mpu
-        assert err <= TOL_M, f"Blender {b['blender']} {name} at frame {k}: {err:.3e} m"
-    # the frame is not the rest state: the check compares motion, not two copies of the rest
-    assert np.max(np.abs(pc2[k] - pc2[0])) * mpu > 1e-4
+    assert np.max(np.abs(b["rest"] - rest)) * mpu <= TOL_M
+    assert info["frames"] == pc2.shape[0]
+    for name in ("pc2", "mdd", "usd"):
+        got = b[name]
+        assert got.shape == pc2.shape, name
+        err = np.max(np.abs(got - pc2), axis=(1, 2)) * mpu
+        k = int(np.argmax(err))
+        assert err[k] <= TOL_M, f"Blender {info['blender']} {name} at frame {k}: {err[k]:.3e} m"
+    # the frames are not the rest state: the check compares motion, not copies of the rest
+    assert np.max(np.abs(pc2[-1] - pc2[0])) * mpu > 1e-4
 
 
 def test_a_skin_that_is_the_model_surface_follows_the_frames(run):
@@ -162,7 +242,7 @@ def test_a_skin_that_is_the_model_surface_follows_the_frames(run):
         pytest.skip("the skin is not the model's own surface")
     pc2 = read_pc2(d / "skin.pc2")
     frames = frames_of(d)
-    for k in (0, len(frames) // 2, len(frames) - 1):
+    for k in range(len(frames)):
         pts = meshio.read(d / frames[k][1]).points
         n = pc2.shape[1]
         assert np.max(np.abs(pc2[k] - pts[:n])) <= TOL_M, f"frame {k}"
