@@ -249,35 +249,28 @@ def test_a_skin_that_is_the_model_surface_follows_the_frames(run):
 
 
 def test_the_jaw_opening_unzips_the_lips(run):
-    """Where the run measured the lips (mouth and face models): the first lip column to open
-    is in the middle third of the mouth and the columns open later the farther they are from
-    the centre (positive Spearman rank correlation of opening time with |x|), every column
-    open at the end. Printed with -s. Skipped, after printing, where the run holds
-    `unzips_off_centre` (scripts/face_meshes.py's heads known not to)."""
-    from scipy.stats import spearmanr
+    """Where the run measured the lips (mouth and face models), with the zip front the paper's
+    claims use (src/measures.rs ZipFront, scripts/face_meshes.py zip_times): the first column
+    to open lies within 0.2 of the half-width w of the centre (claim C2), the Spearman rank
+    correlation of opening time with |x| is at least 0.6 (C4), and every column is open at the
+    end. Printed with -s. Skipped, after printing, where the run holds `unzips_off_centre`
+    (runs measured not to: the file says what was measured)."""
+    sys.path.insert(0, str(HERE))
+    from face_meshes import FIRST_OPENING_MAX, zip_times
     d, _ = run
     if not (d / "measures.json").exists():
         pytest.skip("no lip measures")
     m = json.loads((d / "measures.json").read_text())
-    xs = np.array(m["columns"]["x"])
-    opened = [None] * len(xs)
-    for f in m["frames"]:
-        for i, g in enumerate(f["gap"]):
-            if opened[i] is None and g > m["open_threshold"]:
-                opened[i] = f["time"]
-    centre, half = 0.5 * (xs.max() + xs.min()), 0.5 * (xs.max() - xs.min())
-    t_first, x_first = m["first_opening"]
-    idx = [i for i, t in enumerate(opened) if t is not None]
-    rho = spearmanr(np.abs(xs[idx] - centre), [opened[i] for i in idx]).correlation
-    print(f"{d}: first opening at t = {t_first} s, x = {1e3 * (x_first - centre):.1f} mm; "
-          f"columns open {len(idx)}/{len(xs)}; Spearman(|x|, t) = {rho:.3f}; "
-          f"opening times {[t for t in opened]}")
+    first, rho, n_open, n = zip_times(m)
+    print(f"{d}: first opening at "
+          + (f"t = {first[0]:.3f} s, |x - c| = {first[1]:.2f} w" if first else "none")
+          + f"; Spearman(|x|, t) = {rho}; columns open at the end {n_open}/{n}")
     if (d / "unzips_off_centre").exists():
-        pytest.skip("known not to unzip from the centre (scripts/face_meshes.py OFF_CENTRE): "
+        pytest.skip("known not to unzip from the centre: "
                     + (d / "unzips_off_centre").read_text().strip())
-    assert abs(x_first - centre) <= half / 3
-    assert len(idx) == len(xs) and m["frames"][-1]["open_fraction"] > 0.99
-    assert rho > 0
+    assert first is not None and first[1] <= FIRST_OPENING_MAX + 1e-9, first
+    assert rho is not None and rho >= 0.6, rho
+    assert n_open == n and m["frames"][-1]["open_fraction"] > 0.99
 
 
 def test_the_rest_mesh_is_the_users_mesh(run):
