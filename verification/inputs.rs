@@ -892,3 +892,93 @@ fn a_sweep_expands_into_runs_and_a_job_list() {
     assert!(!dir.join("bad_runs").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// No command overwrites its own input: `face` with the head (or its rig) in `--out` under a
+/// name it writes, `extrude` with the surface there, `mouth` with its parameters there. Each
+/// is refused before anything is written, naming the input and `--out`, and the file keeps
+/// its bytes.
+#[test]
+fn no_command_overwrites_its_input() {
+    use std::process::Command;
+    let bin = env!("CARGO_BIN_EXE_sticky-lips");
+    let dir = std::env::temp_dir().join(format!("sticky-lips-overwrite-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+    let cases: [(&[&str], &str, &str); 5] = [
+        (
+            &["face", "{d}/head.obj", "--out", "{d}"],
+            "head.obj",
+            "the head is",
+        ),
+        (
+            &["face", "{d}/model.obj", "--out", "{d}"],
+            "model.obj",
+            "the head is",
+        ),
+        (
+            &[
+                "face",
+                "{d}/in.obj",
+                "--rig",
+                "{d}/head.json",
+                "--out",
+                "{d}",
+            ],
+            "head.json",
+            "the rig (--rig) is",
+        ),
+        (
+            &[
+                "extrude",
+                "{d}/../x/mesh.vtu",
+                "--thickness",
+                "0.01",
+                "--out",
+                "{d}/../x",
+            ],
+            "../x/mesh.vtu",
+            "the surface is",
+        ),
+        (
+            &["mouth", "--params", "{d}/mouth.json", "--out", "{d}"],
+            "mouth.json",
+            "the parameters (--params) is",
+        ),
+    ];
+    for (k, (args, file, want)) in cases.iter().enumerate() {
+        let d = dir.join(format!("case{k}"));
+        std::fs::create_dir_all(d.join("../x")).unwrap();
+        std::fs::write(d.join("in.obj"), obj).unwrap();
+        let target = d.join(file);
+        let content = format!("{obj}# the user's file {k}\n");
+        std::fs::write(&target, &content).unwrap();
+        let args: Vec<String> = args
+            .iter()
+            .map(|a| a.replace("{d}", d.to_str().unwrap()))
+            .collect();
+        let o = Command::new(bin).args(&args).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.contains(want) && err.contains("--out") && err.contains("overwrite"),
+            "{args:?}: {err}"
+        );
+        assert_eq!(
+            std::fs::read_to_string(&target).unwrap(),
+            content,
+            "{args:?}: the input changed"
+        );
+        let written: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert!(
+            written
+                .iter()
+                .all(|n| n == "in.obj" || n == "x" || target.ends_with(n)),
+            "{args:?}: wrote {written:?}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

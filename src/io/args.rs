@@ -13,6 +13,27 @@ pub fn count(text: &str, what: &str) -> std::result::Result<usize, String> {
     }
 }
 
+/// The most worker threads a run may have: four per CPU the process may use
+/// (`std::thread::available_parallelism`). More would only cost time (the results are the
+/// same for any count), and a mistyped count would otherwise spawn threads until the
+/// machine gives out.
+pub fn max_threads() -> usize {
+    4 * std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// A thread count: at least 1 and at most [`max_threads`].
+pub fn threads(text: &str) -> std::result::Result<usize, String> {
+    let n = count(text, "thread")?;
+    let max = max_threads();
+    if n > max {
+        return Err(format!(
+            "{n} threads on a machine with {} CPUs: at most {max} (four per CPU)",
+            max / 4
+        ));
+    }
+    Ok(n)
+}
+
 /// A finite number between `lo` and `hi` (each bound included where `*_inclusive`), for an
 /// option whose physical range is known (e.g. `--humidity`, a fraction of 1). `what` names
 /// the quantity and its range in the message.
@@ -68,6 +89,18 @@ pub fn name_value<'a>(spec: &'a str, option: &str, expected: &str) -> Result<(&'
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn thread_counts_are_bounded_by_the_cpus() {
+        let max = max_threads();
+        assert!(max >= 4 && max % 4 == 0);
+        assert_eq!(threads("1"), Ok(1));
+        assert_eq!(threads(&max.to_string()), Ok(max));
+        let e = threads(&(max + 1).to_string()).unwrap_err();
+        assert!(e.contains("four per CPU"), "{e}");
+        assert!(threads("100000000").is_err());
+        assert!(threads("0").is_err());
+    }
 
     #[test]
     fn numbers_in_a_range() {

@@ -38,6 +38,51 @@ fn sync_parent_dir(path: &Path) {
     let _ = path;
 }
 
+/// Whether `a` and `b` name the same existing file (through symbolic links, and on Unix
+/// through hard links too).
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (fs::canonicalize(a), fs::canonicalize(b)) {
+        (Ok(x), Ok(y)) if x == y => return true,
+        (Ok(_), Ok(_)) => {}
+        _ => return false,
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let (Ok(x), Ok(y)) = (fs::metadata(a), fs::metadata(b)) {
+            return x.dev() == y.dev() && x.ino() == y.ino();
+        }
+    }
+    false
+}
+
+/// Refuses, before anything is written, a command whose output directory `out` would
+/// receive one of `outputs` (file names) over one of its `inputs` (`(path, what)`: `what`
+/// names the argument, e.g. `the head (HEAD.obj)`): a user's file is never overwritten.
+pub fn refuse_overwriting_inputs(
+    out: &Path,
+    outputs: &[&str],
+    inputs: &[(&Path, &str)],
+) -> crate::error::Result<()> {
+    for name in outputs {
+        let target = out.join(name);
+        for (input, what) in inputs {
+            if same_file(input, &target) {
+                return Err(crate::error::Error::input(
+                    input.display().to_string(),
+                    crate::error::Location::Field("--out".into()),
+                    format!(
+                        "{what} is {}, which this command writes: it would overwrite its own \
+                         input; give another --out",
+                        target.display()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Atomically replace `path` with `bytes`.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
     write_atomic_with(path, |w| w.write_all(bytes))

@@ -815,7 +815,7 @@ fn positive_arg(s: &str) -> Result<f64, String> {
 }
 
 fn threads_arg(s: &str) -> Result<usize, String> {
-    sticky_lips::io::args::count(s, "thread")
+    sticky_lips::io::args::threads(s)
 }
 
 fn blend(input: &InputArgs, shapes: &[String], out: &Path) -> sticky_lips::Result<()> {
@@ -946,6 +946,13 @@ fn write_mesh_outputs(
 fn mouth(params: Option<&Path>, resolution: Option<f64>, out: &Path) -> sticky_lips::Result<()> {
     use sticky_lips::error::{Error, Location};
     use sticky_lips::mesh::mouth;
+    if let Some(path) = params {
+        sticky_lips::io::atomic::refuse_overwriting_inputs(
+            out,
+            &["mouth.obj", "mesh.vtu", "model.xml", "mouth.json"],
+            &[(path, "the parameters (--params)")],
+        )?;
+    }
     let mut p: mouth::MouthParams = match params {
         Some(path) => {
             let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
@@ -1066,6 +1073,19 @@ fn detect_units(
     }
 }
 
+/// The files `face` writes into its output directory.
+const FACE_OUTPUTS: [&str; 9] = [
+    "face.obj",
+    "face.json",
+    "head.obj",
+    "head.json",
+    "model.obj",
+    "mesh.vtu",
+    "model.xml",
+    "groups.png",
+    "scenario.toml",
+];
+
 fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
     use sticky_lips::error::{Error, Location};
     use sticky_lips::mesh::face;
@@ -1098,6 +1118,15 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
             format!("unknown unit `{}` (m, dm, cm, mm, in or auto)", a.units),
         ));
     }
+    // nothing the command writes may land on one of its inputs
+    let mut inputs = vec![(a.input, "the head")];
+    if let Some(r) = a.rig {
+        inputs.push((r, "the rig (--rig)"));
+    }
+    if let Some(p) = a.params {
+        inputs.push((p, "the crop parameters (--params)"));
+    }
+    sticky_lips::io::atomic::refuse_overwriting_inputs(a.out, &FACE_OUTPUTS, &inputs)?;
     let head = sticky_lips::io::obj::read_polygons(a.input)?;
     let scale = if a.units == "auto" {
         let (unit, scale) = detect_units(&head, &file)?;
@@ -1221,6 +1250,11 @@ fn extrude(
 ) -> sticky_lips::Result<()> {
     use sticky_lips::mesh::extrude;
     let file = surface.display().to_string();
+    sticky_lips::io::atomic::refuse_overwriting_inputs(
+        out,
+        &["mesh.vtu", "model.xml"],
+        &[(surface, "the surface")],
+    )?;
     let s = sticky_lips::io::obj::read_obj(surface)?;
     let mut per_group = Vec::new();
     for g in groups {

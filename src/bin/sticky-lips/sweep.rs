@@ -156,6 +156,14 @@ pub fn sweep(o: &Options) -> Result<()> {
     if threads == 0 {
         return Err(err(&file, "threads", "must be at least 1"));
     }
+    let max = sticky_lips::io::args::max_threads();
+    if threads > max {
+        return Err(err(
+            &file,
+            "threads",
+            format!("{threads} per run: at most {max} (four per CPU of this machine)"),
+        ));
+    }
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let jobs_at_once = spec.jobs.unwrap_or((cores / threads).max(1));
     if jobs_at_once == 0 {
@@ -171,7 +179,23 @@ pub fn sweep(o: &Options) -> Result<()> {
     }
     if !keys.is_empty() {
         let sizes: Vec<usize> = keys.iter().map(|k| spec.grid[*k].len()).collect();
-        let total: usize = sizes.iter().product();
+        // checked: a product that overflows is more runs than allowed, not a small number
+        let total = sizes
+            .iter()
+            .try_fold(1usize, |a, &n| a.checked_mul(n))
+            .filter(|&t| t <= 100_000);
+        let Some(total) = total else {
+            let shape = sizes
+                .iter()
+                .map(|n| n.to_string())
+                .collect::<Vec<_>>()
+                .join(" x ");
+            return Err(err(
+                &file,
+                "grid",
+                format!("gives {shape} runs (at most 100000)"),
+            ));
+        };
         if total > 100_000 {
             return Err(err(
                 &file,
@@ -195,14 +219,55 @@ pub fn sweep(o: &Options) -> Result<()> {
         }
     }
     for (i, s) in spec.shot.iter().enumerate() {
-        if s.name.is_empty() || s.name.contains(['/', '\\']) || s.name.starts_with('.') {
+        // a name becomes a directory, a line of jobs.txt and a comment in the scenario: letters,
+        // digits, `.`, `_` and `-` only (no newline, quote or path), not the sweep's own files
+        let plain = !s.name.is_empty()
+            && s.name.len() <= 100
+            && !s.name.starts_with(['.', '-'])
+            && s.name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || "._-".contains(c));
+        if !plain {
             return Err(err(
                 &file,
                 format!("shot[{i}].name"),
-                "must be a plain directory name",
+                format!(
+                    "{:?} must be a plain directory name: 1 to 100 of A-Z a-z 0-9 . _ -, not \
+                     starting with . or -",
+                    s.name
+                ),
+            ));
+        }
+        if RESERVED.contains(&s.name.as_str()) {
+            return Err(err(
+                &file,
+                format!("shot[{i}].name"),
+                format!("`{}` is a file of the sweep itself", s.name),
             ));
         }
         runs.push((s.name.clone(), s.set.clone()));
+    }
+    // override keys are paths into the scenario; they are written into each scenario's
+    // first line, so they too are plain
+    let plain_key = |k: &str| {
+        !k.is_empty()
+            && k.chars()
+                .all(|c| c.is_ascii_alphanumeric() || "._-".contains(c))
+    };
+    for (field, key) in spec.grid.keys().map(|k| (format!("grid.{k:?}"), k)).chain(
+        spec.shot.iter().enumerate().flat_map(|(i, s)| {
+            s.set
+                .keys()
+                .map(move |k| (format!("shot[{i}].set.{k:?}"), k))
+        }),
+    ) {
+        if !plain_key(key) {
+            return Err(err(
+                &file,
+                field,
+                "a key is a path of names and indices: A-Z a-z 0-9 _ - joined by .",
+            ));
+        }
     }
     if runs.is_empty() {
         return Err(err(&file, "grid", "the spec has neither a grid nor shots"));
@@ -211,6 +276,20 @@ pub fn sweep(o: &Options) -> Result<()> {
     for (n, _) in &runs {
         if !seen.insert(n.clone()) {
             return Err(err(&file, "shot", format!("two runs are called `{n}`")));
+        }
+    }
+    // paths go into job lines and comments one line each: no control characters
+    for (field, path) in [
+        ("out", out.display().to_string()),
+        ("base", base_name.clone()),
+        ("spec", file.clone()),
+    ] {
+        if path.chars().any(char::is_control) {
+            return Err(err(
+                &file,
+                field,
+                format!("{path:?} holds a control character (a newline?)"),
+            ));
         }
     }
     // every scenario is built and checked before anything is written
@@ -314,6 +393,9 @@ pub fn sweep(o: &Options) -> Result<()> {
     }
     Ok(())
 }
+
+/// The files a sweep writes beside its runs.
+const RESERVED: [&str; 2] = ["jobs.txt", "sweep.json"];
 
 fn shell_quote(s: &str) -> String {
     if !s.is_empty()
