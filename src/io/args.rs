@@ -112,7 +112,13 @@ mod tests {
             let e = frac(bad).unwrap_err();
             assert!(e.contains("0 to 1"), "{bad}: {e}");
         }
-        // an excluded bound
+        // an excluded upper bound: the bound itself refused, just below it taken
+        let below_one = |t: &str| number_in(t, (0.0, true), (1.0, false), "below 1");
+        assert!(below_one("1").is_err());
+        assert!(below_one("1.5").is_err());
+        assert_eq!(below_one("0.999"), Ok(0.999));
+        assert_eq!(below_one("0"), Ok(0.0));
+        // an excluded lower bound
         let kelvin = |t: &str| number_in(t, (-273.15, false), (1e3, true), "above -273.15 C");
         assert!(kelvin("-273.15").is_err());
         assert_eq!(kelvin("-273.1"), Ok(-273.1));
