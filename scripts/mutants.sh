@@ -12,7 +12,8 @@
 # runs when its name contains one of them) for the unit tests and the verification target
 # (empty: all of them). Mutants build with the `mutants` profile
 # (opt-level 1, no debug info, no GPU feature: a mutant rebuilds in seconds). Results:
-# target/mutants-out/mutants.out/{caught,missed,unviable,timeout}.txt.
+# target/mutants-out/mutants.out/{caught,missed,unviable,timeout}.txt, archived under
+# verification/mutants/DATE_FILES/ (commit it with the tests it led to).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 FILES=${MUTANTS_FILES:-"src/material/saliva.rs src/tled/saliva_forces.rs"}
@@ -28,6 +29,27 @@ filter=()
 # shellcheck disable=SC2206
 [ -n "$FILTER" ] && filter=(-- $FILTER)
 mkdir -p target/mutants-out
+started=$(date -u +%Y-%m-%dT%H:%M:%SZ)
+# what the run mutates: the commit now, and whether the tree differs from it (cargo-mutants
+# copies the tree as it is at the start)
+commit=$(git rev-parse HEAD)
+changed=()
+[ -n "$(git status --porcelain --untracked-files=no)" ] && changed=(--tree-changed)
+set +e
 cargo mutants --profile mutants --no-default-features --features equilibrium "${args[@]}" "$@" \
   --output target/mutants-out --timeout 300 \
   -- --lib --test verification "${filter[@]}"
+rc=$?
+set -e
+# Archive the outcome (verification/mutants/, committed): the command, cargo-mutants' version,
+# the commit and machine, cargo-mutants' own outcomes.json, and per file the counts of caught,
+# missed, unviable and timed-out mutants (scripts/mutants_archive.py; the table in
+# verification/README.md is made from these archives by `python3 scripts/mutants_archive.py --table`).
+# cargo-mutants exits 0 when every mutant was caught, 2 when some were missed, 3 on timeouts:
+# all are outcomes worth keeping; anything else (a build that failed before testing) is not.
+if [ "$rc" = 0 ] || [ "$rc" = 2 ] || [ "$rc" = 3 ]; then
+  python3 scripts/mutants_archive.py target/mutants-out/mutants.out \
+    --started "$started" --commit "$commit" "${changed[@]}" --version "$(cargo mutants --version)" \
+    --command "MUTANTS_FILES=\"$FILES\" MUTANTS_TESTS=\"$FILTER\" bash scripts/mutants.sh $*"
+fi
+exit "$rc"
