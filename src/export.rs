@@ -116,6 +116,19 @@ pub fn export(skin: &Skin, dir: &Path) -> Result<ExportSummary> {
             "lists no frames",
         ));
     }
+    // the files hold one sample per frame in time order: frames out of order are refused
+    for (k, w) in entries.windows(2).enumerate() {
+        if w[1].0 <= w[0].0 {
+            return Err(Error::input(
+                dir.join("frames.pvd").display().to_string(),
+                Location::Field(format!("DataSet {}", k + 1)),
+                format!(
+                    "{} at t = {} s does not come after {} at t = {} s",
+                    w[1].1, w[1].0, w[0].1, w[0].0
+                ),
+            ));
+        }
+    }
     let to32 = |p: [f64; 3]| p.map(|x| x as f32);
     let fr = &skin.frame;
     let mut frames: Vec<Vec<[f32; 3]>> = Vec::with_capacity(entries.len());
@@ -136,6 +149,13 @@ pub fn export(skin: &Skin, dir: &Path) -> Result<ExportSummary> {
                     "has {n} points of {comps} components; the model has {} surface nodes",
                     skin.model.vertices.len()
                 ),
+            ));
+        }
+        if let Some(i) = u.iter().position(|x| !x.is_finite()) {
+            return Err(Error::input(
+                path.display().to_string(),
+                Location::Field(format!("point data `displacement`, point {}", i / 3)),
+                "is not finite: a frame of a run that diverged? (nothing was written)",
             ));
         }
         let u: Vec<[f64; 3]> = u.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();

@@ -982,3 +982,91 @@ fn no_command_overwrites_its_input() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `export` reads a run's frames and writes the animation files only from frames it can
+/// trust: frames listed out of time order, and a frame with a non-finite displacement, are
+/// refused naming the file and the entry or point, and the files already there are left as
+/// they were.
+#[test]
+fn export_refuses_frames_out_of_order_and_non_finite() {
+    use std::process::Command;
+    let bin = env!("CARGO_BIN_EXE_sticky-lips");
+    let dir = std::env::temp_dir().join(format!("sticky-lips-export-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    // a short run of the quick face (300 steps, 4 frames)
+    let path = crate::common::repo().join("examples/plosive.toml");
+    let text = sticky_lips::io::scenario::with_overrides(
+        &std::fs::read_to_string(&path).unwrap(),
+        "plosive.toml",
+        &[
+            ("time.total", toml::Value::Float(0.003)),
+            ("time.output_every", toml::Value::Integer(100)),
+        ],
+    )
+    .unwrap();
+    let scenario = dir.join("scenario.toml");
+    std::fs::write(&scenario, text).unwrap();
+    let run = dir.join("run");
+    let o = Command::new(bin)
+        .args(["run", scenario.to_str().unwrap(), "--quiet", "--out"])
+        .arg(&run)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let pc2 = std::fs::read(run.join("skin.pc2")).unwrap();
+    let export = |what: &str, want: &[&str]| {
+        let o = Command::new(bin).arg("export").arg(&run).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{what}: {err}");
+        for w in want {
+            assert!(err.contains(w), "{what}: expected `{w}` in {err}");
+        }
+        assert_eq!(
+            std::fs::read(run.join("skin.pc2")).unwrap(),
+            pc2,
+            "{what}: skin.pc2 was rewritten"
+        );
+    };
+    // two frames' times swapped in frames.pvd
+    let pvd_path = run.join("frames.pvd");
+    let pvd = std::fs::read_to_string(&pvd_path).unwrap();
+    let swapped = pvd
+        .replacen("timestep=\"0.001\"", "timestep=\"@\"", 1)
+        .replacen("timestep=\"0.002\"", "timestep=\"0.001\"", 1)
+        .replacen("timestep=\"@\"", "timestep=\"0.002\"", 1);
+    assert_ne!(swapped, pvd, "frames.pvd: {pvd}");
+    std::fs::write(&pvd_path, &swapped).unwrap();
+    export("times out of order", &["frames.pvd", "does not come after"]);
+    std::fs::write(&pvd_path, &pvd).unwrap();
+    // a NaN in the last frame's displacement
+    let frame = std::fs::read_dir(&run)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| {
+            p.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("frame_")
+        })
+        .max()
+        .unwrap();
+    let xml = std::fs::read_to_string(&frame).unwrap();
+    let at = xml.find("Name=\"displacement\"").unwrap();
+    let start = at + xml[at..].find('>').unwrap() + 1;
+    let end = start + xml[start..].find("</DataArray>").unwrap();
+    let mut raw = sticky_lips::io::vtu::base64_decode(&xml[start..end]).unwrap();
+    raw[8 + 8 * 7..8 + 8 * 8].copy_from_slice(&f64::NAN.to_le_bytes());
+    let forged = format!(
+        "{}{}{}",
+        &xml[..start],
+        sticky_lips::io::vtu::base64_encode(&raw),
+        &xml[end..]
+    );
+    std::fs::write(&frame, forged).unwrap();
+    export(
+        "a NaN displacement",
+        &["point data `displacement`, point 2", "is not finite"],
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -3,7 +3,8 @@
 //!
 //! * **CSV** (or any text table): one key per line, time and value separated by a comma,
 //!   semicolon, tab or spaces; blank lines and lines starting with `#` are skipped, and so is
-//!   a first line that is not two numbers (a header such as `time,value` or `frame,jaw`).
+//!   a first line none of whose columns is a number (a header such as `time,value` or
+//!   `frame,jaw`); a first line with a number in it is data, and refused if malformed.
 //! * **JSON**: `[[t, v], ...]`, `[{"time": t, "value": v}, ...]` (also `"frame"` for `"time"`)
 //!   or `{"time": [...], "value": [...]}`.
 //!
@@ -13,16 +14,22 @@
 
 use crate::error::{Error, Location, Result};
 
+/// The frame rates `keys_fps` may take (frames per second): from one frame in 1000 s to a
+/// million a second. Outside it a key's time would be absurd (at 1e-300 fps frame 1 lies
+/// 1e300 s away, and the curve never moves).
+pub const FPS_RANGE: (f64, f64) = (1e-3, 1e6);
+
 /// Seconds per key time unit: 1, or `1 / fps` where the times are frame numbers; an error
-/// naming `field` in `name` for a rate that is not positive and finite.
+/// naming `field` in `name` for a rate outside [`FPS_RANGE`].
 pub fn time_scale(fps: Option<f64>, name: &str, field: &str) -> Result<f64> {
+    let (lo, hi) = FPS_RANGE;
     match fps {
         None => Ok(1.0),
-        Some(f) if f.is_finite() && f > 0.0 => Ok(1.0 / f),
+        Some(f) if f.is_finite() && (lo..=hi).contains(&f) => Ok(1.0 / f),
         Some(f) => Err(Error::input(
             name,
             Location::Field(field.into()),
-            format!("must be a positive frame rate, got {f}"),
+            format!("must be a frame rate from {lo:e} to {hi:e} per second, got {f:e}"),
         )),
     }
 }
@@ -30,6 +37,8 @@ pub fn time_scale(fps: Option<f64>, name: &str, field: &str) -> Result<f64> {
 /// Parses the text of a keys file (`name` for messages); times in seconds.
 pub fn parse_keys(text: &str, name: &str, fps: Option<f64>) -> Result<Vec<(f64, f64)>> {
     let scale = time_scale(fps, name, "keys_fps")?;
+    // a byte order mark (some spreadsheets and editors write one) is not part of the data
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let first = text.trim_start().chars().next();
     let keys = if matches!(first, Some('[') | Some('{')) {
         parse_json(text, name)?
@@ -42,8 +51,16 @@ pub fn parse_keys(text: &str, name: &str, fps: Option<f64>) -> Result<Vec<(f64, 
     Ok(keys.into_iter().map(|(t, v)| (t * scale, v)).collect())
 }
 
-/// Reads a keys file.
+/// Reads a keys file: a regular file (a FIFO or a device would block or never end).
 pub fn read_keys(path: &std::path::Path, fps: Option<f64>) -> Result<Vec<(f64, f64)>> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if !meta.is_file() {
+        return Err(Error::input(
+            path.display().to_string(),
+            Location::None,
+            "is not a regular file (a keys file is a CSV or JSON file)",
+        ));
+    }
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     parse_keys(&text, &path.display().to_string(), fps)
 }
@@ -73,8 +90,12 @@ fn parse_table(text: &str, name: &str) -> Result<Vec<(f64, f64)>> {
                 keys.push((n[0], n[1]));
                 seen_data = true;
             }
-            _ if !seen_data && keys.is_empty() => {
-                // a header line
+            // a header: the first line, and none of its columns a number (`time,value`,
+            // `frame,jaw`); a first line with numbers in it is a malformed data row
+            _ if !seen_data
+                && keys.is_empty()
+                && cols.iter().all(|c| c.parse::<f64>().is_err()) =>
+            {
                 seen_data = true;
             }
             _ => {
@@ -193,5 +214,53 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("keys_fps"), "{e}");
+    }
+
+    #[test]
+    fn a_malformed_first_row_is_not_taken_for_a_header() {
+        // a first line with a number in it is data: refused when malformed, naming line 1
+        for text in ["0,0.1x\n1,0.2\n", "0,0.1,0.2\n1,0.2\n", "0;x\n1,0.2\n"] {
+            let e = parse_keys(text, "jaw.csv", None).unwrap_err().to_string();
+            assert!(e.contains("jaw.csv:1:"), "{text:?}: {e}");
+        }
+        // a header has no number in it
+        assert_eq!(
+            parse_keys("t,v\n1,0.2\n", "jaw.csv", None).unwrap(),
+            vec![(1.0, 0.2)]
+        );
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_not_data() {
+        let want = vec![(0.0, 0.0), (0.5, 0.2)];
+        for text in [
+            "\u{feff}[[0, 0], [0.5, 0.2]]",
+            "\u{feff}time,value\n0,0\n0.5,0.2\n",
+        ] {
+            assert_eq!(parse_keys(text, "k", None).unwrap(), want, "{text:?}");
+        }
+    }
+
+    #[test]
+    fn frame_rates_outside_the_range_are_refused() {
+        for fps in [1e-300, 1e-4, 2e6, f64::INFINITY, -24.0] {
+            let e = parse_keys("0,1\n", "k.csv", Some(fps))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("keys_fps") && e.contains("frame rate from"),
+                "{fps}: {e}"
+            );
+        }
+        for fps in [1e-3, 24.0, 1e6] {
+            assert!(parse_keys("0,1\n", "k.csv", Some(fps)).is_ok(), "{fps}");
+        }
+    }
+
+    #[test]
+    fn a_keys_file_that_is_not_a_regular_file_is_refused() {
+        let dir = std::env::temp_dir();
+        let e = read_keys(&dir, None).unwrap_err().to_string();
+        assert!(e.contains("not a regular file"), "{e}");
     }
 }

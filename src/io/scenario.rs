@@ -1035,6 +1035,8 @@ impl Reader<'_> {
                 )
             }
             (None, Some(file)) => {
+                // the rate is the scenario's field: checked (and named) here, before the file
+                crate::io::keys::time_scale(c.keys_fps, self.f, &format!("{field}.keys_fps"))?;
                 let path = self.base.join(file);
                 let k = crate::io::keys::read_keys(&path, c.keys_fps).map_err(|e| match e {
                     Error::Io { .. } => {
