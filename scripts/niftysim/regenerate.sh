@@ -159,25 +159,31 @@ def read_table(path):
     return rows
 
 
+def compare_values(pairs, build):
+    """(components, identical components, max |d|, max |d| / max |old|) over (new, old)
+    pairs; f32 after rounding both to float32."""
+    n = same = 0
+    dmax = umax = 0.0
+    for x, y in pairs:
+        if build == "f32":
+            x, y = f32(x), f32(y)
+            eq = bits32(x) == bits32(y)
+        else:
+            eq = bits64(x) == bits64(y)
+        n += 1
+        same += eq
+        dmax = max(dmax, abs(x - y))
+        umax = max(umax, abs(y))
+    return n, same, dmax, dmax / umax if umax > 0 else 0.0
+
+
 def compare_tables(new, old, build):
-    """(components, identical components, max |d|, max |d| / max |old|) ; f32 after rounding."""
+    """compare_values over two tables with the same rows; None where the rows differ."""
     a, b = read_table(new), read_table(old)
     if [r[0] for r in a] != [r[0] for r in b]:
         return None
-    n = same = 0
-    dmax = umax = 0.0
-    for (_, va), (_, vb) in zip(a, b):
-        for x, y in zip(va, vb):
-            if build == "f32":
-                x, y = f32(x), f32(y)
-                eq = bits32(x) == bits32(y)
-            else:
-                eq = bits64(x) == bits64(y)
-            n += 1
-            same += eq
-            dmax = max(dmax, abs(x - y))
-            umax = max(umax, abs(y))
-    return n, same, dmax, dmax / umax if umax > 0 else 0.0
+    return compare_values(((x, y) for (_, va), (_, vb) in zip(a, b) for x, y in zip(va, vb)),
+                          build)
 
 
 results = []  # (model, build, file, n, same, dabs, drel, text_identical)
@@ -233,21 +239,11 @@ for build in ("f64", "f32"):
         hist = [l.split() for l in open(os.path.join(cdir, f"{m}_hist.txt")) if not l.startswith("#")]
         last = [h for h in hist if int(h[0]) == nsteps + 1]
         unew = {r[0]: r[1] for r in read_table(os.path.join(odir, f"{m}_U.txt"))}
-        n = same = 0
-        dmax = umax = 0.0
-        for h in last:
-            for x, y in zip(unew[int(h[2])], (float(v) for v in h[3:6])):
-                if build == "f32":
-                    x, y = f32(x), f32(y)
-                    eq = bits32(x) == bits32(y)
-                else:
-                    eq = bits64(x) == bits64(y)
-                n += 1
-                same += eq
-                dmax = max(dmax, abs(x - y))
-                umax = max(umax, abs(y))
+        n, same, dmax, rel = compare_values(
+            ((x, y) for h in last
+             for x, y in zip(unew[int(h[2])], (float(v) for v in h[3:6]))), build)
         results.append((m, build, f"{m}_U.txt vs {m}_hist.txt rows of step {nsteps + 1}", n, same,
-                        dmax, dmax / umax if umax else 0.0, None))
+                        dmax, rel, None))
         if same != n or n == 0:
             bad += 1
         # info, key by key
