@@ -980,6 +980,30 @@ fn no_command_overwrites_its_input() {
             "{args:?}: wrote {written:?}"
         );
     }
+    // through a symbolic link and a hard link to the user's file: refused, the file unchanged
+    #[cfg(unix)]
+    for (k, symbolic) in [true, false].into_iter().enumerate() {
+        let d = dir.join(format!("link{k}"));
+        std::fs::create_dir_all(&d).unwrap();
+        let user = dir.join(format!("users_head{k}.obj"));
+        std::fs::write(&user, obj).unwrap();
+        if symbolic {
+            std::os::unix::fs::symlink(&user, d.join("head.obj")).unwrap();
+        } else {
+            std::fs::hard_link(&user, d.join("head.obj")).unwrap();
+        }
+        let o = Command::new(bin)
+            .arg("face")
+            .arg(d.join("head.obj"))
+            .arg("--out")
+            .arg(&d)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "link {k}: {err}");
+        assert!(err.contains("overwrite"), "link {k}: {err}");
+        assert_eq!(std::fs::read_to_string(&user).unwrap(), obj, "link {k}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -1068,5 +1092,19 @@ fn export_refuses_frames_out_of_order_and_non_finite() {
         "a NaN displacement",
         &["point data `displacement`, point 2", "is not finite"],
     );
+    // the skin map is never written over a file of the run
+    let o = Command::new(bin)
+        .arg("export")
+        .arg(&run)
+        .arg("--skin-map")
+        .arg(run.join("summary.json"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("overwrite"), "{err}");
+    assert!(std::fs::read_to_string(run.join("summary.json"))
+        .unwrap()
+        .contains("steps"));
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -536,6 +536,21 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                 ));
             };
             if let Some(path) = skin_map {
+                // the map is a new file: never one of the run's files or the scenario
+                let mut inputs: Vec<PathBuf> = std::fs::read_dir(&run_dir)
+                    .map_err(|e| sticky_lips::Error::io(&run_dir, e))?
+                    .filter_map(|e| e.ok().map(|e| e.path()))
+                    .collect();
+                inputs.push(input.input.clone());
+                let named: Vec<(&Path, &str)> = inputs
+                    .iter()
+                    .map(|p| (p.as_path(), "a file of the run or its scenario"))
+                    .collect();
+                let (dir, name) = (
+                    path.parent().unwrap_or(Path::new(".")),
+                    path.file_name().and_then(|n| n.to_str()).unwrap_or(""),
+                );
+                sticky_lips::io::atomic::refuse_overwriting_inputs(dir, &[name], &named)?;
                 let map = sticky_lips::export::skin_map(skin, &run_dir)?;
                 let text = serde_json::to_string(&map).expect("json");
                 sticky_lips::io::atomic::write_atomic(&path, text.as_bytes())
