@@ -95,6 +95,35 @@ pub fn limit_bytes() -> Option<u128> {
     }
 }
 
+/// Bytes the `face` command holds per hexahedron while it builds a model (peak resident
+/// memory of `sticky-lips face` on the MakeHuman head at `--resolution` 16 and 36: 266 MB
+/// for 53 504 hexahedra and 593 MB for 120 192, 2026-12-04, after the skin's quad grid
+/// stopped growing with the square of the count): more than a run of the same model needs.
+pub const FACE_BUILD_BYTES_PER_ELEMENT: u128 = 5000;
+
+/// Refuses a face model of `elements` hexahedra whose build would not fit in `available`
+/// bytes (the run's own need is checked by [`check_with`]).
+pub fn check_face_build_with(
+    file: &str,
+    field: &str,
+    elements: u128,
+    available: Option<u128>,
+) -> Result<()> {
+    let need = elements.saturating_mul(FACE_BUILD_BYTES_PER_ELEMENT);
+    match available {
+        Some(have) if need > have => Err(Error::field(
+            file,
+            field,
+            format!(
+                "gives about {elements} hexahedra, whose build needs about {}; {} are available (the machine's free memory, or {LIMIT_VARIABLE} where set)",
+                gib(need),
+                gib(have)
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// [`check_with`] against [`limit_bytes`].
 pub fn check(file: &str, field: &str, nodes: u128, elements: u128) -> Result<()> {
     check_with(file, field, nodes, elements, limit_bytes())
@@ -149,5 +178,23 @@ mod tests {
         assert!(e.contains("fewer than 2^32"), "{e}");
         // the index limit holds even where the available memory is not known
         check_with("f.toml", "mesh.cells", 1 << 31, 1, None).unwrap();
+    }
+
+    #[test]
+    fn a_face_build_needs_more_than_its_run() {
+        let have = Some(800u128 << 20);
+        // 60 000 hexahedra: about 180 MB to run, about 300 MB to build: both fit
+        check_with("c", "--resolution", 120_000, 60_000, have).unwrap();
+        check_face_build_with("c", "--resolution", 60_000, have).unwrap();
+        // 200 000: about 0.6 GB to run fits, about 1 GB to build does not
+        check_with("c", "--resolution", 400_000, 200_000, have).unwrap();
+        let e = check_face_build_with("c", "--resolution", 200_000, have)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`--resolution`") && e.contains("build needs"),
+            "{e}"
+        );
+        check_face_build_with("c", "--resolution", u128::MAX, None).unwrap();
     }
 }

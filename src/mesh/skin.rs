@@ -432,7 +432,10 @@ impl QuadGrid {
         }
         let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-9);
         let side = (quads.len() as f64).sqrt().clamp(1.0, 1024.0);
-        let cell = extent / side;
+        // cells no smaller than half the reach: a quad then lands in a bounded number of cells
+        // (at most about 5 x 5 beyond its own box), where cells much smaller than the reach made
+        // the lists grow with the square of the quad count (3 GB for 120 000 hexahedra)
+        let cell = (extent / side).max(0.5 * reach);
         let n = |k: usize| (((hi[k] - lo[k]) / cell).ceil() as usize).clamp(1, 1024);
         let (nx, ny) = (n(0), n(1));
         let mut g = QuadGrid {

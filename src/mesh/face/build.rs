@@ -260,6 +260,12 @@ impl FaceParams {
             (self.rows_below + self.rows_above + 1) as f64 * f,
         );
         crate::mesh::budget::check(file, &field("resolution"), nodes, elements)?;
+        crate::mesh::budget::check_face_build_with(
+            file,
+            &field("resolution"),
+            elements,
+            crate::mesh::budget::limit_bytes(),
+        )?;
         if !(self.jaw_weight > 0.0 && self.jaw_weight <= 1.0) {
             return Err(Error::field(
                 file,
