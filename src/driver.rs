@@ -165,8 +165,21 @@ pub fn request_stop() {
     STOP.store(true, std::sync::atomic::Ordering::SeqCst);
 }
 
-fn stop_requested() -> bool {
+/// Whether SIGINT or SIGTERM asked this process to stop ([`request_stop`]).
+pub fn stop_requested() -> bool {
     STOP.load(std::sync::atomic::Ordering::SeqCst)
+}
+
+/// For the long commands that are not a run's stepping: an error [`Error::Cancelled`]
+/// saying `what` (e.g. "face stopped before writing anything") once a stop was requested.
+///
+/// [`Error::Cancelled`]: crate::error::Error::Cancelled
+pub fn check_stop(what: impl FnOnce() -> String) -> crate::error::Result<()> {
+    if stop_requested() {
+        Err(crate::error::Error::Cancelled(what()))
+    } else {
+        Ok(())
+    }
 }
 
 fn pool(threads: usize) -> rayon::ThreadPool {

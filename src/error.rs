@@ -44,6 +44,9 @@ pub enum Error {
     /// The run was stopped by SIGINT or SIGTERM between two steps; the frames written before
     /// are complete and `summary.json` says where it stopped.
     Interrupted { step: usize, time: f64 },
+    /// A command other than a run's stepping (`face`, `export`, `sweep`, `paper`) was stopped
+    /// by SIGINT or SIGTERM: what it had done, and that it left no partial file.
+    Cancelled(String),
     /// The static solver did not converge.
     NotConverged(String),
     /// The GPU backend is unavailable or failed (no adapter, missing feature, shader or
@@ -110,6 +113,7 @@ impl fmt::Display for Error {
                 f,
                 "interrupted at step {step} (t = {time:.6e} s): the frames written so far are complete and listed in frames.pvd; summary.json is marked interrupted"
             ),
+            Error::Cancelled(m) => write!(f, "interrupted: {m}"),
             Error::NotConverged(m) => write!(f, "static solver did not converge: {m}"),
             Error::Gpu(m) => write!(f, "GPU backend: {m}"),
         }

@@ -83,6 +83,105 @@ pub fn refuse_overwriting_inputs(
     Ok(())
 }
 
+/// Temporary files and staging directories this process has open: removed by
+/// [`remove_pending`] when the process must end at once (a second interrupt), so that even
+/// that exit leaves no temporary file behind.
+static PENDING: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+fn pending() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    PENDING.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+fn register(p: &Path) {
+    pending().push(p.to_path_buf());
+}
+
+fn unregister(p: &Path) {
+    let mut v = pending();
+    if let Some(i) = v.iter().rposition(|q| q == p) {
+        v.swap_remove(i);
+    }
+}
+
+/// Removes every temporary file and staging directory still open (for an exit that does
+/// not unwind: the second of two interrupts). Returns how many were removed.
+pub fn remove_pending() -> usize {
+    let v: Vec<PathBuf> = pending().drain(..).collect();
+    let mut n = 0;
+    for p in v {
+        let gone = if p.is_dir() {
+            fs::remove_dir_all(&p)
+        } else {
+            fs::remove_file(&p)
+        };
+        n += usize::from(gone.is_ok());
+    }
+    n
+}
+
+/// A command's outputs written first into a hidden directory beside them
+/// (`DIR/.NAME.staging-PID`) and moved into `DIR` together once all are written and
+/// checked ([`Staging::commit`]). Dropped without a commit (an error, an interrupt), the
+/// staging directory is removed and `DIR` is as it was.
+pub struct Staging {
+    dir: PathBuf,
+    out: PathBuf,
+    done: bool,
+}
+
+impl Staging {
+    /// Creates `out` if needed and the staging directory in it; `name` is the command's.
+    pub fn new(out: &Path, name: &str) -> io::Result<Staging> {
+        fs::create_dir_all(out)?;
+        let dir = out.join(format!(".{name}.staging-{}", std::process::id()));
+        if dir.exists() {
+            fs::remove_dir_all(&dir)?;
+        }
+        register(&dir);
+        if let Err(e) = fs::create_dir(&dir) {
+            unregister(&dir);
+            return Err(e);
+        }
+        Ok(Staging {
+            dir,
+            out: out.to_path_buf(),
+            done: false,
+        })
+    }
+
+    /// Where to write the outputs.
+    pub fn path(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Moves every file written into the staging directory into the output directory (each
+    /// by an atomic rename, replacing an older output of the same name) and removes the
+    /// staging directory. Returns the names moved, sorted.
+    pub fn commit(mut self) -> io::Result<Vec<String>> {
+        let mut names: Vec<String> = fs::read_dir(&self.dir)?
+            .map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned()))
+            .collect::<io::Result<_>>()?;
+        names.sort();
+        for n in &names {
+            fs::rename(self.dir.join(n), self.out.join(n))?;
+        }
+        fs::remove_dir(&self.dir)?;
+        unregister(&self.dir);
+        sync_parent_dir(&self.out.join("x"));
+        self.done = true;
+        Ok(names)
+    }
+}
+
+impl Drop for Staging {
+    fn drop(&mut self) {
+        if !self.done {
+            let _ = fs::remove_dir_all(&self.dir);
+            unregister(&self.dir);
+        }
+    }
+}
+
 /// Atomically replace `path` with `bytes`.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> io::Result<()> {
     write_atomic_with(path, |w| w.write_all(bytes))
@@ -96,6 +195,7 @@ where
     F: FnOnce(&mut dyn Write) -> io::Result<()>,
 {
     let tmp = temp_path(path)?;
+    register(&tmp);
     let result = (|| {
         let file = OpenOptions::new()
             .write(true)
@@ -109,7 +209,7 @@ where
         drop(file);
         fs::rename(&tmp, path)
     })();
-    match result {
+    let result = match result {
         Ok(()) => {
             sync_parent_dir(path);
             Ok(())
@@ -118,7 +218,9 @@ where
             let _ = fs::remove_file(&tmp);
             Err(e)
         }
-    }
+    };
+    unregister(&tmp);
+    result
 }
 
 #[cfg(test)]
@@ -193,6 +295,28 @@ mod tests {
         assert_eq!(err.to_string(), "simulated crash");
         assert_eq!(fs::read(&p).unwrap(), b"old");
         assert!(leftovers(&d).is_empty());
+        fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn staging_commits_together_or_leaves_nothing() {
+        let d = scratch_dir("staging");
+        fs::write(d.join("a.txt"), b"old").unwrap();
+        {
+            let s = Staging::new(&d, "t").unwrap();
+            write_atomic(&s.path().join("a.txt"), b"new").unwrap();
+            write_atomic(&s.path().join("b.txt"), b"b").unwrap();
+            // dropped without a commit: nothing moved, the staging directory gone
+        }
+        assert_eq!(fs::read(d.join("a.txt")).unwrap(), b"old");
+        assert!(!d.join("b.txt").exists());
+        assert_eq!(fs::read_dir(&d).unwrap().count(), 1);
+        let s = Staging::new(&d, "t").unwrap();
+        write_atomic(&s.path().join("a.txt"), b"new").unwrap();
+        write_atomic(&s.path().join("b.txt"), b"b").unwrap();
+        assert_eq!(s.commit().unwrap(), vec!["a.txt", "b.txt"]);
+        assert_eq!(fs::read(d.join("a.txt")).unwrap(), b"new");
+        assert_eq!(fs::read_dir(&d).unwrap().count(), 2);
         fs::remove_dir_all(&d).unwrap();
     }
 

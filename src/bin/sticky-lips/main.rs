@@ -350,6 +350,9 @@ fn out_dir(explicit: Option<PathBuf>, default: Option<PathBuf>, input: &Path) ->
 /// report an interrupted command).
 const EXIT_INTERRUPTED: u8 = 130;
 
+/// Seconds after a first SIGINT/SIGTERM within which further ones are the same request.
+const SIGNAL_BURST_S: f64 = 1.0;
+
 fn main() -> ExitCode {
     // Rust ignores SIGPIPE, so writing to a closed pipe (`sticky-lips ... | head`) would
     // panic in println!; a command-line tool ends quietly there, as the default action does.
@@ -360,17 +363,26 @@ fn main() -> ExitCode {
     }
     let cli = Cli::parse();
     // SIGINT/SIGTERM: runs stop between steps, finish the frames handed to the writer and
-    // write summary.json marked interrupted; a second signal ends the process at once.
+    // write summary.json marked interrupted; `face`, `export`, `sweep` and `paper` stop at
+    // their next check and remove what they had not finished. Signals within
+    // SIGNAL_BURST_S of the first are one request (GNU timeout and job schedulers signal
+    // the process and then its group, which can arrive as two); a signal after that ends
+    // the process at once, removing its temporary files first.
     let _ = ctrlc::set_handler(|| {
-        static SEEN: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-        if SEEN.swap(true, std::sync::atomic::Ordering::SeqCst) {
+        static FIRST: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
+        let now = std::time::Instant::now();
+        let first = *FIRST.get_or_init(|| now);
+        if first == now {
+            sticky_lips::driver::request_stop();
+        } else if now.duration_since(first).as_secs_f64() > SIGNAL_BURST_S {
+            sticky_lips::io::atomic::remove_pending();
+            eprintln!("interrupted twice: stopped at once; temporary files removed, the last frames may be missing");
             std::process::exit(EXIT_INTERRUPTED as i32);
         }
-        sticky_lips::driver::request_stop();
     });
     match real_main(cli) {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e @ sticky_lips::Error::Interrupted { .. }) => {
+        Err(e @ (sticky_lips::Error::Interrupted { .. } | sticky_lips::Error::Cancelled(_))) => {
             eprintln!("{e}");
             ExitCode::from(EXIT_INTERRUPTED)
         }
@@ -1133,6 +1145,13 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
             format!("unknown unit `{}` (m, dm, cm, mm, in or auto)", a.units),
         ));
     }
+    // the model's parameters (only --resolution comes from the command line) before the
+    // head is read: a model too large for the memory budget is refused here
+    face::FaceParams {
+        resolution: a.resolution,
+        ..Default::default()
+    }
+    .validate("command line", "--")?;
     // nothing the command writes may land on one of its inputs
     let mut inputs = vec![(a.input, "the head")];
     if let Some(r) = a.rig {
@@ -1143,6 +1162,10 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
     }
     sticky_lips::io::atomic::refuse_overwriting_inputs(a.out, &FACE_OUTPUTS, &inputs)?;
     let head = sticky_lips::io::obj::read_polygons(a.input)?;
+    face::check_head_size(&head, &file)?;
+    sticky_lips::driver::check_stop(|| {
+        "face stopped after reading the head; nothing written".into()
+    })?;
     let scale = if a.units == "auto" {
         let (unit, scale) = detect_units(&head, &file)?;
         println!("face: units {unit}, from the head's size (give --units to choose)");
@@ -1159,13 +1182,7 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
     let rig: face::FaceRig = match a.rig {
         Some(p) => {
             let text = std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?;
-            serde_json::from_str(&text).map_err(|e| {
-                Error::input(
-                    p.display().to_string(),
-                    Location::Line(e.line()),
-                    e.to_string(),
-                )
-            })?
+            face::FaceRig::from_json(&text, &p.display().to_string())?
         }
         None => face::FaceRig::default(),
     };
@@ -1195,13 +1212,20 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
     if let Some(n) = axes_note {
         src.data.notes.insert(0, n);
     }
-    face::write_dir(a.out, &src)?;
     let fp = face::FaceParams {
         resolution: a.resolution,
         ..Default::default()
     };
-    let model = face::build(&src, &fp, &a.out.join("face.json").display().to_string())?;
-    sticky_lips::io::obj::write_obj(&a.out.join("model.obj"), &model.surface)?;
+    // the model is built, its scenario parsed and its picture drawn before anything is
+    // written: a refusal leaves no partial output
+    let model = face::build(&src, &fp, &file)?;
+    let stopped = || "face stopped before writing anything".to_string();
+    sticky_lips::driver::check_stop(stopped)?;
+    let staging =
+        sticky_lips::io::atomic::Staging::new(a.out, "face").map_err(|e| Error::io(a.out, e))?;
+    let dir = staging.path();
+    face::write_dir(dir, &src)?;
+    sticky_lips::io::obj::write_obj(&dir.join("model.obj"), &model.surface)?;
     let groups: Vec<(String, Vec<u32>)> = ["upper_face", "lower_face", "saliva"]
         .iter()
         .map(|g| {
@@ -1211,10 +1235,10 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
             )
         })
         .collect();
-    write_mesh_outputs(a.out, &model.mesh, &groups)?;
+    write_mesh_outputs(dir, &model.mesh, &groups)?;
     // a scenario that runs on it as it is: Table 1, the wide jaw opening with stickiness
-    let path = a.out.join("scenario.toml");
-    let label = path.display().to_string();
+    let label = a.out.join("scenario.toml").display().to_string();
+    let path = dir.join("scenario.toml");
     let text = format!(
         "# sticky-lips face {}: Table 1 on this face (the paper's wide jaw opening with\n\
          # stickiness); `sticky-lips run {label}`.\n{}",
@@ -1237,13 +1261,17 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
         )?
     );
     let problem = scenario::parse(&text, &path)?.problem;
+    sticky_lips::driver::check_stop(stopped)?;
     sticky_lips::io::atomic::write_atomic(&path, text.as_bytes())
         .map_err(|e| Error::io(&path, e))?;
     // and a picture of its material groups
     if let Some(cols) = &problem.physics.lip_columns {
         let img = paper::look::groups_picture(&problem, cols, 900, 560);
-        sticky_lips::render::save_png(&a.out.join("groups.png"), &img)?;
+        sticky_lips::render::save_png(&dir.join("groups.png"), &img)?;
     }
+    // every file is written and checked: all move into --out together
+    sticky_lips::driver::check_stop(stopped)?;
+    staging.commit().map_err(|e| Error::io(a.out, e))?;
     for n in src.data.notes.iter().chain(&model.notes) {
         println!("face: {n}");
     }

@@ -664,6 +664,9 @@ pub fn detect_axes(
             if l == u {
                 continue;
             }
+            crate::driver::check_stop(|| {
+                format!("face stopped while detecting the axes of {file}; nothing written")
+            })?;
             if let Some(m) = find_mouth(&s, &adj, &pairs, axis(u), axis(l), params) {
                 if best.as_ref().is_none_or(|b| m.mean_gap < b.0.mean_gap) {
                     best = Some((m, u, l));
@@ -769,17 +772,21 @@ pub const MIN_SIDE: f64 = 0.005;
 /// vertices are taken left to right and joined by the shortest path along the surface that
 /// only moves left to right (one edge where they are neighbours). Refused, naming `file`,
 /// where a lip has no vertex between the corners, two of its vertices cannot be joined so,
-/// or the two lines share a vertex besides the corners.
+/// or the two lines share a vertex besides the corners. The fields are named `prefix` +
+/// `upper_lip` or `lower_lip` (`rig.` where `file` is the head's, nothing where it is the
+/// rig's own file).
 pub fn contour_from_lists(
     s: &QuadSurface,
     adj: &Adjacency,
     upper: &[u32],
     lower: &[u32],
     file: &str,
+    prefix: &str,
 ) -> Result<Contour> {
     let p = |v: u32| s.vertices[v as usize];
     let x = |v: &u32| p(*v)[0];
-    let refuse = |field: &str, what: String| Err(Error::field(file, format!("rig.{field}"), what));
+    let refuse =
+        |field: &str, what: String| Err(Error::field(file, format!("{prefix}{field}"), what));
     let all: Vec<u32> = upper.iter().chain(lower).copied().collect();
     let (Some(&cr), Some(&cl)) = (
         all.iter()

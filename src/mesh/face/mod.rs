@@ -25,7 +25,8 @@ pub mod topology;
 
 pub use build::{build, FaceModel, FaceParams};
 pub use prepare::{
-    prepare, FaceData, FaceRig, FaceSource, HeadMesh, InputFrame, InputUnits, PrepareParams,
+    check_head_size, prepare, FaceData, FaceRig, FaceSource, HeadMesh, InputFrame, InputUnits,
+    PrepareParams, MAX_HEAD_QUADS, MAX_POLYGON_CORNERS,
 };
 
 use crate::error::{Error, Location, Result};

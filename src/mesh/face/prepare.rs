@@ -109,6 +109,206 @@ pub struct FaceRig {
     /// lips meet, corners included or not. Give both or neither.
     pub upper_lip: Option<Vec<u32>>,
     pub lower_lip: Option<Vec<u32>>,
+    /// The file the rig was read from (not a field of it): its errors name this file.
+    #[serde(skip)]
+    pub file: Option<String>,
+}
+
+/// The largest distance of a rig's hinge point from the mouth's centre (metres, model frame):
+/// a temporomandibular joint lies about 0.1 m from the mouth; a point much farther is an error
+/// of units or axes, and a jaw turned about it moves metres in the first step.
+pub const MAX_HINGE_DISTANCE: f64 = 0.3;
+
+/// The most corners one polygon of a head may have: a cap over the neck has a few hundred;
+/// a polygon of 100 000 corners took minutes in the lip finder before being refused.
+pub const MAX_POLYGON_CORNERS: usize = 1000;
+
+/// The most quads a head may have once split into quads (a quad stays one, a triangle
+/// becomes three, a polygon of n corners n): about 100 000 triangles. The lip finder's time
+/// grows about as the count to the power 1.8: measured on this 2-core machine
+/// (2026-12-04, the MakeHuman head and its subdivisions, no rig): 4 254 quads 0.4 s, 68 064
+/// quads 16.8 s, 272 256 quads 197 s; 2 million triangles ran 334 s before failing.
+pub const MAX_HEAD_QUADS: usize = 300_000;
+
+/// Peak memory of `face` per quad of the split head (482 MB at 272 256 quads, as above).
+pub const HEAD_BYTES_PER_QUAD: u128 = 2000;
+
+/// Refuses a head that is upside down in the frame given (e.g. `--up 0,-1,0` on a head with
+/// `+y` up, which would swap the lips without a word): in a band down the middle of the face
+/// (within a quarter of the mouth's width `w` of its centre left and right), the most
+/// forward point between 0.3 w and 1.5 w above the mouth (the nose) must lie in front of the
+/// most forward point as far below it (the chin). Where one of the two is missing (a face
+/// cut off above the nose or at the mouth) nothing is checked. `centre` and the surface are
+/// in the model frame (metres, y up, z forward).
+pub fn check_upright(
+    s: &QuadSurface,
+    centre: [f64; 3],
+    w: f64,
+    up: [f64; 3],
+    file: &str,
+) -> Result<()> {
+    let mut above = f64::NEG_INFINITY;
+    let mut below = f64::NEG_INFINITY;
+    for p in &s.vertices {
+        if (p[0] - centre[0]).abs() > 0.25 * w {
+            continue;
+        }
+        let h = (p[1] - centre[1]) / w;
+        if (0.3..=1.5).contains(&h) {
+            above = above.max(p[2]);
+        } else if (-1.5..=-0.3).contains(&h) {
+            below = below.max(p[2]);
+        }
+    }
+    if above.is_finite() && below.is_finite() && below > above + 0.05 * w {
+        return Err(Error::input(
+            file,
+            Location::Field("--up".into()),
+            format!(
+                "with up = {up:?} the head looks upside down: below the mouth the face reaches \
+                 {:.1} mm further forward than above it (a nose lies above the mouth, a chin \
+                 below); give the opposite direction, --up {},{},{}",
+                1e3 * (below - above),
+                0.0 - up[0],
+                0.0 - up[1],
+                0.0 - up[2]
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Refuses, before any large work, a head with a polygon of more than
+/// [`MAX_POLYGON_CORNERS`] corners, or more than [`MAX_HEAD_QUADS`] quads once split, or
+/// whose preparation would not fit in the memory budget; the message gives the estimates.
+pub fn check_head_size(head: &PolySurface, file: &str) -> Result<()> {
+    if let Some((i, f)) = head
+        .faces
+        .iter()
+        .enumerate()
+        .find(|(_, f)| f.len() > MAX_POLYGON_CORNERS)
+    {
+        let location = match head.face_lines.get(i) {
+            Some(&l) => Location::Line(l),
+            None => Location::Field(format!("face {}", i + 1)),
+        };
+        return Err(Error::input(
+            file,
+            location,
+            format!(
+                "a polygon of {} corners (at most {MAX_POLYGON_CORNERS}): triangulate it, or \
+                 remove it (a cap over the neck is not needed)",
+                f.len()
+            ),
+        ));
+    }
+    let quads: u128 = head
+        .faces
+        .iter()
+        .map(|f| if f.len() == 4 { 1 } else { f.len() as u128 })
+        .sum();
+    let minutes = 197.0 / 60.0 * (quads as f64 / 272_256.0).powf(1.8);
+    let need = quads.saturating_mul(HEAD_BYTES_PER_QUAD);
+    let gib = |b: u128| b as f64 / (1u128 << 30) as f64;
+    let estimate = format!(
+        "{quads} quads once split (a triangle makes 3, a polygon of n corners n): about \
+         {minutes:.1} minutes and {:.2} GiB to prepare on a 2-core machine",
+        gib(need)
+    );
+    if quads > MAX_HEAD_QUADS as u128 {
+        return Err(Error::input(
+            file,
+            Location::None,
+            format!(
+                "the head is too large: {estimate}; at most {MAX_HEAD_QUADS} quads: decimate it \
+                 (Blender's Decimate modifier) or cut it closer around the face"
+            ),
+        ));
+    }
+    if let Some(have) = crate::mesh::budget::limit_bytes() {
+        if need > have {
+            return Err(Error::input(
+                file,
+                Location::None,
+                format!(
+                    "the head does not fit in memory: {estimate}; {:.2} GiB are available (the \
+                     machine's free memory, or {} where set)",
+                    gib(have),
+                    crate::mesh::budget::LIMIT_VARIABLE
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+impl FaceRig {
+    /// A rig read from its JSON text, with the checks that need no head: every number finite,
+    /// a hinge axis of non-zero length, jaw weights in [0, 1], lip lists not empty. Errors
+    /// name `file` and the field (or the line of a JSON syntax error).
+    pub fn from_json(text: &str, file: &str) -> Result<FaceRig> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        let mut rig: FaceRig = serde_json::from_str(text)
+            .map_err(|e| Error::input(file, Location::Line(e.line()), e.to_string()))?;
+        rig.file = Some(file.to_string());
+        let finite3 = |v: &[f64; 3]| v.iter().all(|x| x.is_finite());
+        if let Some(p) = &rig.hinge_point {
+            if !finite3(p) {
+                return Err(Error::field(
+                    file,
+                    "hinge_point",
+                    format!("must be finite, got {p:?}"),
+                ));
+            }
+        }
+        if let Some(a) = &rig.hinge_axis {
+            let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+            if !(finite3(a) && n.is_finite() && n > 0.0) {
+                return Err(Error::field(
+                    file,
+                    "hinge_axis",
+                    format!("must be a finite direction of non-zero length, got {a:?}"),
+                ));
+            }
+        }
+        if let Some(w) = &rig.jaw_weight {
+            if let Some((i, v)) = w
+                .iter()
+                .enumerate()
+                .find(|(_, v)| !(0.0..=1.0).contains(*v))
+            {
+                return Err(Error::field(
+                    file,
+                    format!("jaw_weight[{i}]"),
+                    format!("must be in [0, 1], got {v}"),
+                ));
+            }
+        }
+        for (name, t) in &rig.targets {
+            if let Some(i) = t.iter().position(|v| !finite3(v)) {
+                return Err(Error::field(
+                    file,
+                    format!("targets.{name}[{i}]"),
+                    format!("must be finite, got {:?}", t[i]),
+                ));
+            }
+        }
+        for (name, list) in [("upper_lip", &rig.upper_lip), ("lower_lip", &rig.lower_lip)] {
+            if list.as_ref().is_some_and(|l| l.len() < 2) {
+                return Err(Error::field(
+                    file,
+                    name,
+                    "must list at least two vertices along the lip",
+                ));
+            }
+        }
+        Ok(rig)
+    }
+
+    /// The file the rig's errors name: the rig's own, else `head` (a rig made in code).
+    fn error_file<'a>(&'a self, head: &'a str) -> &'a str {
+        self.file.as_deref().unwrap_or(head)
+    }
 }
 
 /// The model surface of a face and everything the model needs besides its mesh (metres,
@@ -437,6 +637,11 @@ pub fn find_contour(
     let mut found: Vec<(f64, f64, Vec<u32>, Vec<u32>)> = Vec::new();
     let max_len = 4 * s.vertices.len().min(4000);
     for v in 0..s.vertices.len() as u32 {
+        if v % 256 == 0 {
+            crate::driver::check_stop(|| {
+                format!("face stopped while finding the lips of {file}; nothing written")
+            })?;
+        }
         if !pinch[v as usize].is_finite() {
             continue;
         }
@@ -543,13 +748,20 @@ pub fn prepare(
     file: &str,
 ) -> Result<FaceSource> {
     frame.check(file)?;
+    check_head_size(head, file)?;
+    // the rig's errors name its file and field (or the head's file and `rig.FIELD`)
+    let rig_file = rig.error_file(file);
+    let rig_field = |name: &str| match rig.file {
+        Some(_) => name.to_string(),
+        None => format!("rig.{name}"),
+    };
     let nv_in = head.vertices.len();
     for (name, len) in [("jaw_weight", rig.jaw_weight.as_ref().map(|w| w.len()))] {
         if let Some(n) = len {
             if n != nv_in {
                 return Err(Error::field(
-                    file,
-                    format!("rig.{name}"),
+                    rig_file,
+                    rig_field(name),
                     format!("has {n} values for {nv_in} vertices"),
                 ));
             }
@@ -558,8 +770,8 @@ pub fn prepare(
     for (name, t) in &rig.targets {
         if t.len() != nv_in {
             return Err(Error::field(
-                file,
-                format!("rig.targets.{name}"),
+                rig_file,
+                rig_field(&format!("targets.{name}")),
                 format!("has {} offsets for {nv_in} vertices", t.len()),
             ));
         }
@@ -581,8 +793,8 @@ pub fn prepare(
             for (name, list) in [("upper_lip", u), ("lower_lip", l)] {
                 if let Some(v) = list.iter().find(|&&v| v as usize >= nv_in) {
                     return Err(Error::field(
-                        file,
-                        format!("rig.{name}"),
+                        rig_file,
+                        rig_field(name),
                         format!(
                             "vertex {v} is out of range: the head has {nv_in} vertices (0-based)"
                         ),
@@ -594,24 +806,25 @@ pub fn prepare(
         (None, None) => None,
         _ => {
             return Err(Error::field(
-                file,
-                if rig.upper_lip.is_some() {
-                    "rig.lower_lip"
+                rig_file,
+                rig_field(if rig.upper_lip.is_some() {
+                    "lower_lip"
                 } else {
-                    "rig.upper_lip"
-                },
+                    "upper_lip"
+                }),
                 "give both upper_lip and lower_lip, or neither (the contour is then found)",
             ))
         }
     };
     let (contour, how) = if let Some((u, l)) = named {
         (
-            super::lips::contour_from_lists(&s, &adj, u, l, file)?,
+            super::lips::contour_from_lists(&s, &adj, u, l, rig_file, &rig_field(""))?,
             "the rig's upper_lip and lower_lip",
         )
     } else if refined.parents.is_empty() {
         match find_contour(&s, &adj, params, file) {
             Ok(c) => (c, "the closed edge loop"),
+            Err(e @ Error::Cancelled(_)) => return Err(e),
             Err(loops) => (
                 find_contour_general(&s, &adj, params, file).map_err(|_| loops)?,
                 "the lips' front edges (no closed edge loop fits)",
@@ -695,6 +908,7 @@ pub fn prepare(
         .map(|&v| pu(v)[2])
         .fold(f64::NEG_INFINITY, f64::max);
     let centre = [0.5 * (cr[0] + cl[0]), 0.5 * (cr[1] + cl[1]), front];
+    check_upright(&s, centre, dist(cr, cl), frame.up, file)?;
     let in_box = |c: [f64; 3]| {
         (c[0] - centre[0]).abs() <= params.half_width
             && c[1] >= centre[1] - params.below
@@ -797,10 +1011,33 @@ pub fn prepare(
         ));
         h
     });
-    let hinge_axis = rig
-        .hinge_axis
-        .map(|a| unit(frame.vector(a)))
-        .unwrap_or([1.0, 0.0, 0.0]);
+    if rig.hinge_point.is_some() {
+        let d = dist(hinge_point, centre);
+        if !(d <= MAX_HINGE_DISTANCE) {
+            return Err(Error::field(
+                rig_file,
+                rig_field("hinge_point"),
+                format!(
+                    "lies {d:.3e} m from the mouth's centre (at most {MAX_HINGE_DISTANCE} m: a jaw \
+                     hinges about 0.1 m from the mouth); check the rig's units and axes against the head's"
+                ),
+            ));
+        }
+    }
+    let hinge_axis = match rig.hinge_axis {
+        Some(a) => {
+            let u = unit(frame.vector(a));
+            if !u.iter().all(|x| x.is_finite()) {
+                return Err(Error::field(
+                    rig_file,
+                    rig_field("hinge_axis"),
+                    format!("must be a finite direction of non-zero length, got {a:?}"),
+                ));
+            }
+            u
+        }
+        None => [1.0, 0.0, 0.0],
+    };
     // muscles from the mouth's landmarks
     let scale = width / 0.05;
     // without the rig's weights, the jaw's share of each vertex's motion from where it is
