@@ -211,6 +211,21 @@ if [ -s "$OUT/makehuman-head/head.obj" ]; then
     if [ -f "$m/unzips_off_centre" ]; then cp "$m/unzips_off_centre" "$m/face/run/"; fi
     ANIM="$ANIM:$m/face/run"
   done
+  # refusals that need a whole head (issue 28): given axes upside down (the lips would swap),
+  # a rig whose hinge lies 1e300 away (a jaw that leaves at step 1); nothing written
+  H="$OUT/makehuman-head"
+  if "$BIN" face "$H/head.obj" --rig "$H/rig.json" --units dm --up 0,-1,0 --forward 0,0,1 \
+      --out "$OUT/refused_flip" 2> "$OUT/refused_flip.err"; then
+    echo "face accepted a head upside down"; exit 1
+  fi
+  grep -q "field \`--up\`: with up = \[0.0, -1.0, 0.0\] the head looks upside down" "$OUT/refused_flip.err"
+  "$PY" -c "import json,sys; r=json.load(open(sys.argv[1])); r['hinge_point']=[0,0,1e300]; json.dump(r,open(sys.argv[2],'w'))" \
+    "$H/rig.json" "$OUT/far_hinge_rig.json"
+  if "$BIN" face "$H/head.obj" --rig "$OUT/far_hinge_rig.json" --out "$OUT/refused_hinge" 2> "$OUT/refused_hinge.err"; then
+    echo "face accepted a hinge 1e300 away"; exit 1
+  fi
+  grep -q "far_hinge_rig.json: field \`hinge_point\`: lies 1.000e299 m from the mouth" "$OUT/refused_hinge.err"
+  test ! -e "$OUT/refused_flip" && test ! -e "$OUT/refused_hinge"
   # the contours found on triangles (decimated, mixed) and with the axes detected lie where
   # the quad head's loop finder puts them
   "$PY" scripts/face_meshes.py --contours "$OUT/face_meshes/mm_zup/face" "$OUT/face_meshes/cm_xfwd/face" \

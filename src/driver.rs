@@ -377,6 +377,7 @@ fn run_with<S: Stepper>(
         let path = opts.out.join(checkpoint::FILE_NAME);
         let (header, state) = checkpoint::read(&path)?;
         checkpoint::check_matches(&path, &header, problem, sim.precision_name())?;
+        checkpoint::check_frames(&path, &header, &opts.out)?;
         sim.restore(&state)?;
         let writer = FrameWriter::resume(
             &opts.out,
@@ -577,6 +578,7 @@ fn record<S: Stepper>(
             ),
         });
     }
+    history.last_frame_hash = Some(checkpoint::displacement_hash(u.as_flattened()));
     writer.frame(Frame {
         time: sim.time(),
         u,

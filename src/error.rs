@@ -107,7 +107,17 @@ impl fmt::Display for Error {
                 if let Some(n) = node {
                     write!(f, ", node {n}")?;
                 }
-                write!(f, ": {reason}")
+                write!(f, ": {reason}")?;
+                if *step <= 2 {
+                    write!(
+                        f,
+                        " (at the first steps: what the run started from or was given is out of \
+                         range, not the stepping: check the keyed controls' values (jaw angle in \
+                         radians, activations in [0, 1]), the prescribed displacements, the rig's \
+                         hinge, and for a restart the checkpoint)"
+                    )?;
+                }
+                Ok(())
             }
             Error::Interrupted { step, time } => write!(
                 f,

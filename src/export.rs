@@ -139,6 +139,12 @@ pub fn export(skin: &Skin, dir: &Path) -> Result<ExportSummary> {
     let times: Vec<f64> = entries.iter().map(|e| e.0).collect();
     let need = skin.max_node().map_or(0, |n| n as usize + 1);
     for (k, (t, file)) in entries.iter().enumerate() {
+        crate::driver::check_stop(|| {
+            format!(
+                "export stopped at frame {k} of {}; no animation file written (they are written together at the end)",
+                entries.len()
+            )
+        })?;
         let path = dir.join(file);
         let (u, comps, n) = crate::io::vtu::read_point_data_f64(&path, "displacement")?;
         if comps != 3 || n < need.max(skin.model.vertices.len()) {
@@ -270,6 +276,9 @@ pub fn export(skin: &Skin, dir: &Path) -> Result<ExportSummary> {
         ("skin.mdd", mdd_bytes(&frames, &times)),
         ("skin.usda", usda.into_bytes()),
     ];
+    crate::driver::check_stop(|| {
+        "export stopped after reading every frame; no animation file written".to_string()
+    })?;
     for (name, bytes) in &files {
         let p = dir.join(name);
         crate::io::atomic::write_atomic(&p, bytes).map_err(|e| Error::io(&p, e))?;

@@ -526,8 +526,13 @@ fn interrupted_runs_leave_complete_frames_and_say_where_they_stopped() {
             .replace("total = 0.01", "total = 100.0\noutput_every = 2000"),
     )
     .unwrap();
-    for signal in ["INT", "TERM"] {
-        let out = dir.join(format!("out_{signal}"));
+    // the third: two signals a moment apart (GNU timeout signals the process, then its
+    // group): one request, the same clean stop
+    for (k, (signal, twice)) in [("INT", false), ("TERM", false), ("INT", true)]
+        .into_iter()
+        .enumerate()
+    {
+        let out = dir.join(format!("out_{k}_{signal}"));
         std::fs::create_dir_all(&out).unwrap();
         std::fs::write(out.join(".frame_000007.vtu.tmp-999999"), b"half a frame").unwrap();
         let child = Command::new(bin)
@@ -547,11 +552,13 @@ fn interrupted_runs_leave_complete_frames_and_say_where_they_stopped() {
             assert!(t0.elapsed().as_secs() < 60, "no second frame within 60 s");
             std::thread::sleep(std::time::Duration::from_millis(20));
         }
-        let kill = Command::new("kill")
-            .args([format!("-{signal}"), child.id().to_string()])
-            .status()
-            .unwrap();
-        assert!(kill.success());
+        for _ in 0..1 + usize::from(twice) {
+            let kill = Command::new("kill")
+                .args([format!("-{signal}"), child.id().to_string()])
+                .status()
+                .unwrap();
+            assert!(kill.success());
+        }
         let o = child.wait_with_output().unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(130), "SIG{signal}: {err}");
@@ -579,6 +586,135 @@ fn interrupted_runs_leave_complete_frames_and_say_where_they_stopped() {
             assert_eq!((comps, points), (3, 1331), "{f}");
         }
     }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `sweep` honours SIGTERM: no further run starts, the running one is stopped as an
+/// interrupted run (its summary.json says so), and sweep.json lists what ran and what did
+/// not; the sweep exits with 130.
+#[test]
+fn a_sweep_stops_on_a_signal() {
+    use std::process::Command;
+    let bin = env!("CARGO_BIN_EXE_sticky-lips");
+    let dir = std::env::temp_dir().join(format!("sticky-lips-sweep-signal-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("long.toml"),
+        GOOD_TOML
+            .replace("cells = [2, 2, 2]", "cells = [10, 10, 10]")
+            .replace("total = 0.01", "total = 100.0\noutput_every = 2000"),
+    )
+    .unwrap();
+    let spec = dir.join("spec.toml");
+    std::fs::write(
+        &spec,
+        "base = \"long.toml\"\nout = \"runs\"\njobs = 1\n[[shot]]\nname = \"a\"\n[[shot]]\nname = \"b\"\n",
+    )
+    .unwrap();
+    let child = Command::new(bin)
+        .arg("sweep")
+        .arg(&spec)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let runs = dir.join("runs");
+    let t0 = std::time::Instant::now();
+    while !runs.join("a/frame_000001.vtu").exists() {
+        assert!(
+            t0.elapsed().as_secs() < 60,
+            "run a wrote no second frame within 60 s"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let kill = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(
+        err.contains("interrupted: sweep stopped") && err.contains("1 not started"),
+        "{err}"
+    );
+    let sweep: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(runs.join("sweep.json")).unwrap()).unwrap();
+    assert_eq!(sweep["interrupted"], serde_json::json!(true));
+    assert_eq!(sweep["not_started"], serde_json::json!(["b"]));
+    assert_eq!(sweep["runs"][0]["status"], serde_json::json!(130));
+    let a: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(runs.join("a/summary.json")).unwrap()).unwrap();
+    assert!(a["interrupted"]["step"].as_u64().is_some(), "{a}");
+    assert!(!runs.join("b/summary.json").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `face` honours SIGTERM: stopped in the lip finder of a large head (a rough sheet of
+/// 270 400 quads, 11 s to refuse here), it exits with 130 and the message, and `--out` holds
+/// nothing of it (its outputs are staged and moved in together at the end).
+#[test]
+fn face_stops_on_a_signal_and_writes_nothing() {
+    use std::fmt::Write as _;
+    use std::process::Command;
+    let bin = env!("CARGO_BIN_EXE_sticky-lips");
+    let dir = std::env::temp_dir().join(format!("sticky-lips-face-signal-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let n = 520;
+    let mut obj = String::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let z = 0.002 * ((i * 7 + j * 3) % 5) as f64;
+            let _ = writeln!(
+                obj,
+                "v {} {} {z}",
+                0.3 * i as f64 / n as f64,
+                0.3 * j as f64 / n as f64
+            );
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let a = j * (n + 1) + i + 1;
+            let _ = writeln!(obj, "f {a} {} {} {}", a + 1, a + n + 2, a + n + 1);
+        }
+    }
+    let head = dir.join("sheet.obj");
+    std::fs::write(&head, obj).unwrap();
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    let child = Command::new(bin)
+        .arg("face")
+        .arg(&head)
+        .arg("--out")
+        .arg(&out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let kill = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let t0 = std::time::Instant::now();
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted: face stopped"), "{err}");
+    println!(
+        "face stopped {:.2} s after SIGTERM",
+        t0.elapsed().as_secs_f64()
+    );
+    assert_eq!(
+        std::fs::read_dir(&out).unwrap().count(),
+        0,
+        "--out is not empty"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -691,6 +827,37 @@ fn a_killed_run_restarted_from_its_checkpoint_gives_the_uninterrupted_frames() {
     let (code, err) = run(&["run", s, c, "--restart", damaged.to_str().unwrap()]);
     assert_eq!(code, Some(1), "{err}");
     assert!(err.contains("damaged"), "{err}");
+
+    // a checkpoint moved into another run's directory (that run's frames there, a softer
+    // tissue: other displacements from the first frames on): refused before anything
+    // changes, naming the checkpoint and the frame that differs. (A run whose frames up to
+    // the checkpoint are bit for bit the checkpoint's run's is continued: nothing mixes.)
+    let foreign = dir.join("foreign");
+    let short = dir.join("short.toml");
+    std::fs::write(
+        &short,
+        text.replace("total = 1.0", "total = 0.4")
+            .replace("mu = 800.0", "mu = 700.0"),
+    )
+    .unwrap();
+    let fs_ = foreign.to_str().unwrap();
+    assert_eq!(
+        run(&["run", short.to_str().unwrap(), c, "--out", fs_]).0,
+        Some(0)
+    );
+    std::fs::copy(&ck, foreign.join("checkpoint.bin")).unwrap();
+    let before_foreign = listing(&foreign);
+    let (code, err) = run(&["run", c, "--restart", fs_]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(
+        err.contains("checkpoint.bin") && err.contains("belongs to another run"),
+        "{err}"
+    );
+    assert_eq!(
+        listing(&foreign),
+        before_foreign,
+        "a refused restart changed the directory"
+    );
 
     // the restart (input taken from the checkpoint) completes the run
     let (code, err) = run(&["run", c, "--restart", bs]);

@@ -47,6 +47,48 @@ pub struct RunHistory {
     pub frames: Vec<(f64, String)>,
     /// Seconds spent stepping before the checkpoint (for the summary's rates).
     pub stepping_time: f64,
+    /// [`displacement_hash`] of the last frame listed: a restart checks it against that
+    /// frame's file, so that a checkpoint moved into another run's directory is refused
+    /// instead of continuing its own run among the other's frames (absent in checkpoints
+    /// written before it was added: not checked).
+    #[serde(default)]
+    pub last_frame_hash: Option<String>,
+}
+
+/// SHA-256 (hex) of the bits of a frame's displacements, as written to its `displacement`
+/// array (`f64`).
+pub fn displacement_hash(u: &[f64]) -> String {
+    let mut h = Sha256::new();
+    for x in u {
+        h.update(x.to_bits().to_le_bytes());
+    }
+    hex(&h.finalize())
+}
+
+/// Refuses a checkpoint whose history's last frame is not the file of that name in `dir`
+/// (the directory's own run wrote other displacements there).
+pub fn check_frames(path: &Path, header: &Header, dir: &Path) -> Result<()> {
+    let (Some(want), Some((_, file))) = (
+        &header.history.last_frame_hash,
+        header.history.frames.last(),
+    ) else {
+        return Ok(());
+    };
+    let frame = dir.join(file);
+    let (u, _, _) = crate::io::vtu::read_point_data_f64(&frame, "displacement")?;
+    if displacement_hash(&u) != *want {
+        return Err(bad(
+            path,
+            format!(
+                "belongs to another run: the last frame it lists, {}, holds other displacements \
+                 than the checkpoint's run wrote (was the checkpoint copied from another run's \
+                 directory?); restart that run in its own directory, or remove {FILE_NAME} and \
+                 run from the start",
+                frame.display()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 impl RunHistory {
@@ -271,6 +313,7 @@ mod tests {
                 measures: None,
                 frames: vec![(0.0, "frame_000000.vtu".into())],
                 stepping_time: 0.5,
+                last_frame_hash: Some(displacement_hash(&[0.0, 1e-3])),
             },
         };
         (header, state)

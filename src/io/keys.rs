@@ -51,7 +51,12 @@ pub fn parse_keys(text: &str, name: &str, fps: Option<f64>) -> Result<Vec<(f64, 
     Ok(keys.into_iter().map(|(t, v)| (t * scale, v)).collect())
 }
 
-/// Reads a keys file: a regular file (a FIFO or a device would block or never end).
+/// The largest keys file read (64 MiB, about four million keys of CSV): the keys are held
+/// in memory, 16 bytes each, and each curve evaluation searches them.
+pub const MAX_KEYS_FILE_BYTES: u64 = 64 << 20;
+
+/// Reads a keys file: a regular file (a FIFO or a device would block or never end) of at
+/// most [`MAX_KEYS_FILE_BYTES`].
 pub fn read_keys(path: &std::path::Path, fps: Option<f64>) -> Result<Vec<(f64, f64)>> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     if !meta.is_file() {
@@ -59,6 +64,17 @@ pub fn read_keys(path: &std::path::Path, fps: Option<f64>) -> Result<Vec<(f64, f
             path.display().to_string(),
             Location::None,
             "is not a regular file (a keys file is a CSV or JSON file)",
+        ));
+    }
+    if meta.len() > MAX_KEYS_FILE_BYTES {
+        return Err(Error::input(
+            path.display().to_string(),
+            Location::None,
+            format!(
+                "is {} bytes; a keys file may have at most {MAX_KEYS_FILE_BYTES} (64 MiB, about \
+                 four million keys): resample the curve",
+                meta.len()
+            ),
         ));
     }
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
@@ -172,6 +188,22 @@ fn parse_json(text: &str, name: &str) -> Result<Vec<(f64, f64)>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A keys file over the size limit is refused from its size, before it is read (a sparse
+    /// file: nothing is written).
+    #[test]
+    fn a_keys_file_too_large_is_refused_unread() {
+        let p =
+            std::env::temp_dir().join(format!("sticky_lips_big_keys_{}.csv", std::process::id()));
+        let f = std::fs::File::create(&p).unwrap();
+        f.set_len(MAX_KEYS_FILE_BYTES + 1).unwrap();
+        let e = read_keys(&p, None).unwrap_err().to_string();
+        std::fs::remove_file(&p).unwrap();
+        assert!(
+            e.contains("at most 67108864") && e.contains("resample"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn csv_with_a_header_comments_and_frames() {

@@ -451,7 +451,27 @@ pub struct Scenario {
     pub default_output: Option<PathBuf>,
 }
 
+/// The largest scenario file read (16 MiB): a scenario is a few kilobytes; 10^7 inline keys
+/// (about 150 MB of text) took gigabytes in the TOML parser and aborted. Long key lists
+/// belong in a `keys_file` ([`crate::io::keys::MAX_KEYS_FILE_BYTES`]).
+pub const MAX_SCENARIO_BYTES: u64 = 16 << 20;
+
+fn too_large(file: &str, bytes: u64) -> Error {
+    Error::input(
+        file,
+        Location::None,
+        format!(
+            "is {bytes} bytes; a scenario may have at most {MAX_SCENARIO_BYTES} (16 MiB): put long \
+             key lists in a keys_file (CSV or JSON)"
+        ),
+    )
+}
+
 pub fn read(path: &Path) -> Result<Scenario> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if meta.is_file() && meta.len() > MAX_SCENARIO_BYTES {
+        return Err(too_large(&path.display().to_string(), meta.len()));
+    }
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     parse(&text, path)
 }
@@ -523,6 +543,9 @@ const SCENARIO_TIME_KEYS: crate::problem::TimeKeys = crate::problem::TimeKeys {
 pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
     let file = path.display().to_string();
     let f = file.as_str();
+    if text.len() as u64 > MAX_SCENARIO_BYTES {
+        return Err(too_large(f, text.len() as u64));
+    }
     let sf: ScenarioFile = toml::from_str(text).map_err(|e| {
         let msg = e.message().to_string();
         Error::input(f, line_of(text, e.span()), msg)
@@ -1384,4 +1407,28 @@ fn read_physics(
         });
     }
     Ok(physics)
+}
+
+#[cfg(test)]
+mod size_tests {
+    use super::*;
+
+    /// 10^7 inline keys (about 150 MB of text) aborted in the TOML parser: a scenario text over
+    /// 16 MiB is refused before it is parsed, and the message points to keys_file.
+    #[test]
+    fn a_scenario_too_large_is_refused_before_parsing() {
+        let mut text = String::from("[jaw]\nkeys = [");
+        while text.len() as u64 <= MAX_SCENARIO_BYTES {
+            text.push_str("[0.0, 0.0], ");
+        }
+        text.push_str("]\n");
+        let e = parse(&text, Path::new("big.toml"))
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.starts_with("big.toml: is ") && e.contains("keys_file"),
+            "{e}"
+        );
+    }
 }

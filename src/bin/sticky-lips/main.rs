@@ -796,7 +796,8 @@ fn run_input(dir: &Path) -> sticky_lips::Result<PathBuf> {
             e.to_string(),
         )
     })?;
-    v.get("input")
+    let input = v
+        .get("input")
         .and_then(|i| i.as_str())
         .map(PathBuf::from)
         .ok_or_else(|| {
@@ -805,7 +806,26 @@ fn run_input(dir: &Path) -> sticky_lips::Result<PathBuf> {
                 "input",
                 "missing: give the scenario with --scenario",
             )
-        })
+        })?;
+    if !input.exists() {
+        return Err(sticky_lips::Error::field(
+            path.display().to_string(),
+            "input",
+            format!(
+                "names the scenario {}, which is not found from {}{}: give it with --scenario",
+                input.display(),
+                std::env::current_dir()
+                    .map(|d| d.display().to_string())
+                    .unwrap_or_else(|_| "here".into()),
+                if input.is_relative() {
+                    " (a relative path is read from the directory the run was started in)"
+                } else {
+                    ""
+                }
+            ),
+        ));
+    }
+    Ok(input)
 }
 
 fn checkpoint_input(dir: &Path) -> sticky_lips::Result<PathBuf> {

@@ -1012,7 +1012,14 @@ pub fn prepare(
         h
     });
     if rig.hinge_point.is_some() {
-        let d = dist(hinge_point, centre);
+        // scaled by the largest component, so that a point 1e300 away is not an infinity
+        let diff = [0, 1, 2].map(|k| hinge_point[k] - centre[k]);
+        let m = diff.iter().fold(0.0_f64, |a, x| a.max(x.abs()));
+        let d = if m > 0.0 && m.is_finite() {
+            m * diff.iter().map(|x| (x / m) * (x / m)).sum::<f64>().sqrt()
+        } else {
+            m
+        };
         if !(d <= MAX_HINGE_DISTANCE) {
             return Err(Error::field(
                 rig_file,
@@ -1303,6 +1310,84 @@ pub fn surface_height(s: &QuadSurface, x: f64, y: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A profile down the face's middle: the nose (above the mouth) forward of the chin
+    /// (below it) is upright; the same turned upside down is refused, naming `--up`.
+    #[test]
+    fn an_upside_down_head_is_refused() {
+        let mut s = crate::mesh::face::topology::tests::grid(2, 2);
+        // metres, the mouth at the origin, 50 mm wide: nose 35 mm above and 20 mm forward,
+        // chin 40 mm below and 5 mm back
+        let profile = [
+            [0.0, 0.035, 0.020],
+            [0.0, 0.045, 0.010],
+            [0.0, -0.040, -0.005],
+            [0.0, -0.055, -0.015],
+            [0.0, 0.0, 0.0],
+        ];
+        for (v, p) in s.vertices.iter_mut().zip(profile.iter().cycle()) {
+            *v = *p;
+        }
+        check_upright(&s, [0.0; 3], 0.05, [0.0, 1.0, 0.0], "h.obj").unwrap();
+        for v in s.vertices.iter_mut() {
+            v[1] = -v[1];
+        }
+        let e = check_upright(&s, [0.0; 3], 0.05, [0.0, -1.0, 0.0], "h.obj")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`--up`") && e.contains("upside down") && e.contains("--up 0,1,0"),
+            "{e}"
+        );
+        // a face cut off at the mouth: nothing below it to compare, not refused
+        s.vertices.retain(|v| v[1] >= 0.0);
+        check_upright(&s, [0.0; 3], 0.05, [0.0, -1.0, 0.0], "h.obj").unwrap();
+    }
+
+    /// Too many corners in one polygon, or too many quads once split: refused with the
+    /// polygon's line or the estimate, before any work on the head.
+    #[test]
+    fn heads_too_large_are_refused_with_the_estimate() {
+        let mut head = PolySurface {
+            vertices: (0..2000).map(|i| [i as f64, (i % 7) as f64, 0.0]).collect(),
+            uv: None,
+            faces: vec![(0..1001).collect()],
+            group_of_face: vec![0],
+            groups: vec!["g".into()],
+            face_lines: vec![1005],
+            notes: Vec::new(),
+        };
+        let e = check_head_size(&head, "h.obj").unwrap_err().to_string();
+        assert!(
+            e.starts_with("h.obj:1005: a polygon of 1001 corners"),
+            "{e}"
+        );
+        head.faces = vec![vec![0, 1, 2]; 100_001];
+        head.group_of_face = vec![0; 100_001];
+        head.face_lines.clear();
+        let e = check_head_size(&head, "h.obj").unwrap_err().to_string();
+        assert!(
+            e.contains("300003 quads once split")
+                && e.contains("minutes")
+                && e.contains("decimate"),
+            "{e}"
+        );
+        head.faces.truncate(100_000);
+        check_head_size(&head, "h.obj").unwrap();
+    }
+
+    /// A rig's JSON: the checks that need no head, naming the rig's file and field.
+    #[test]
+    fn rig_json_is_checked_on_reading() {
+        let e = |t: &str| FaceRig::from_json(t, "r.json").unwrap_err().to_string();
+        assert!(e("{\"hinge_axis\": [0, 0, 0]}").starts_with("r.json: field `hinge_axis`"));
+        assert!(e("{\"jaw_weight\": [0, -0.5]}").contains("field `jaw_weight[1]`"));
+        assert!(e("{\"upper_lip\": [3]}").contains("field `upper_lip`"));
+        assert!(e("{\"targets\": {\"a\": [[0, 0, 1e999]]}}").starts_with("r.json:1:"));
+        assert!(e("{\"hinge\": 1}").contains("unknown field"));
+        let r = FaceRig::from_json("\u{feff}{\"hinge_axis\": [2, 0, 0]}", "r.json").unwrap();
+        assert_eq!(r.file.as_deref(), Some("r.json"));
+    }
 
     /// A synthetic head: a flat flange (the face, facing +z) around an elliptic slit (the lips:
     /// 50 mm wide, 1.2 mm apart at the centre, at z = 0) that continues back into a tube (the

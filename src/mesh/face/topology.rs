@@ -204,7 +204,7 @@ pub fn submesh(s: &QuadSurface, keep: &[bool]) -> (QuadSurface, Vec<u32>) {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// An `n x m` grid of unit quads in the x-y plane, facing +z.

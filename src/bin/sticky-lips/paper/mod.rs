@@ -98,6 +98,14 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
     let all = runs::all(opts.model, opts.quick);
     let mut done: BTreeMap<String, runs::Run> = BTreeMap::new();
     for spec in all.iter().filter(|s| needed.contains(&s.name)) {
+        sticky_lips::driver::check_stop(|| {
+            format!(
+                "paper stopped before run {} ({} of {} runs done; each finished run's files are complete)",
+                spec.name,
+                done.len(),
+                needed.len()
+            )
+        })?;
         let r = runs::run(opts, spec)?;
         done.insert(spec.name.clone(), r);
     }
@@ -118,6 +126,12 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
     let mut written = Vec::new();
     let mut per_figure = serde_json::Map::new();
     for f in &selected {
+        sticky_lips::driver::check_stop(|| {
+            format!(
+                "paper stopped before figure {} (the runs are complete; `paper --reuse` draws the figures from them)",
+                f.name
+            )
+        })?;
         let t0 = Instant::now();
         let o = (f.produce)(&ctx)?;
         for (name, img) in &o.images {
