@@ -34,6 +34,7 @@ pub mod real;
 pub mod render;
 #[cfg(feature = "equilibrium")]
 pub mod static_solve;
+pub mod sweep;
 pub mod tled;
 
 pub use error::{Error, Result};
