@@ -14,7 +14,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 SECONDS_EACH=${FUZZ_SECONDS:-30}
 TARGETS=("$@")
-[ ${#TARGETS[@]} -eq 0 ] && TARGETS=(scenario_toml niftysim_xml obj vtu cli_values checkpoint keys rig_json sweep_spec)
+[ ${#TARGETS[@]} -eq 0 ] && TARGETS=(scenario_toml niftysim_xml obj vtu cli_values checkpoint keys rig_json sweep_spec lip_finder)
 if ! command -v cargo-fuzz >/dev/null; then
   cargo install cargo-fuzz --locked --version 0.13.2
 fi
