@@ -72,6 +72,18 @@ pub fn read_pvd(dir: &Path) -> Result<Vec<(f64, String)>> {
                 )
             })?;
         out.push((t, f.to_string()));
+        // a run writes at most MAX_FRAMES + 1 frames (the first at t = 0)
+        if out.len() > crate::problem::MAX_FRAMES + 1 {
+            return Err(Error::input(
+                &name,
+                Location::Line(line),
+                format!(
+                    "lists more than {} frames; a run writes at most {} (not a run's frames.pvd?)",
+                    crate::problem::MAX_FRAMES + 1,
+                    crate::problem::MAX_FRAMES + 1
+                ),
+            ));
+        }
     }
     Ok(out)
 }
@@ -297,4 +309,31 @@ pub fn export(skin: &Skin, dir: &Path) -> Result<ExportSummary> {
     let json = serde_json::to_vec_pretty(&summary).expect("export summary serialises");
     crate::io::atomic::write_atomic(&p, &json).map_err(|e| Error::io(&p, e))?;
     Ok(summary)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A `frames.pvd` of more entries than a run writes (one of 200 000 ran for minutes) is
+    /// refused while it is read, with the file and line, before any frame is opened.
+    #[test]
+    fn a_pvd_longer_than_any_run_is_refused() {
+        let dir = std::env::temp_dir().join(format!("sticky_lips_long_pvd_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let n = crate::problem::MAX_FRAMES + 2;
+        let entries: Vec<crate::io::vtu::PvdEntry> = (0..n)
+            .map(|i| crate::io::vtu::PvdEntry {
+                time: i as f64,
+                file: format!("frame_{i:06}.vtu"),
+            })
+            .collect();
+        crate::io::vtu::write_pvd(&dir.join("frames.pvd"), &entries).unwrap();
+        let e = read_pvd(&dir).unwrap_err().to_string();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!(
+            e.contains("frames.pvd:") && e.contains("lists more than 100001 frames"),
+            "{e}"
+        );
+    }
 }

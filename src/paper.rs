@@ -181,6 +181,15 @@ pub fn sweep_name(k: f64, angle: f64) -> String {
 }
 
 /// Every run the figures can ask for.
+/// The time steps of the convergence study (issue 30): from a quarter of Table 1's 1e-5 s
+/// to five times it (5e-5 s: 65 % of the full face's critical step, 7.67e-5 s).
+pub const DT_STUDY: [f64; 6] = [2.5e-6, 5e-6, 1e-5, 2e-5, 4e-5, 5e-5];
+
+/// The name of the convergence study's run at step `dt`.
+pub fn dt_run_name(dt: f64) -> String {
+    format!("dt_{dt:e}")
+}
+
 pub fn all(model: Model, quick: bool) -> Vec<Spec> {
     let c = model.choice();
     let f = Value::Float;
@@ -254,6 +263,15 @@ pub fn all(model: Model, quick: bool) -> Vec<Spec> {
         }
     }
     v.extend(study(quick));
+    for dt in DT_STUDY {
+        v.push(make(
+            &dt_run_name(dt),
+            &format!(
+                "wide opening with stickiness at dt = {dt:e} s (frames every 10 ms, eq. 11's decay in physical time)"
+            ),
+            vec![("time.dt", f(dt))],
+        ));
+    }
     for c in choices(quick).into_iter().filter(|_| model == Model::Face) {
         for &a in &choice_angles(quick) {
             let mut o = choice_pins();
@@ -498,8 +516,28 @@ pub fn scenario_of(
 ) -> Result<(String, Problem)> {
     let mut o: Vec<(String, Value)> = model.base(quick);
     o.extend(s.overrides.iter().cloned());
+    // `time.dt` is not a plain override: the run goes to that step with the frames' interval
+    // and eq. 11's decay kept in seconds (`scenario::with_dt`)
+    let dt = o
+        .iter()
+        .position(|(k, _)| k == "time.dt")
+        .map(|i| o.remove(i).1);
     let refs: Vec<(&str, Value)> = o.iter().map(|(k, v)| (k.as_str(), v.clone())).collect();
     let mut text = scenario::with_overrides(TABLE1, TABLE1_NAME, &refs)?;
+    if let Some(v) = dt {
+        let choice = match v {
+            Value::Float(x) if x.is_finite() && x > 0.0 => scenario::DtChoice::Seconds(x),
+            Value::String(w) if w == "auto" => scenario::DtChoice::Auto,
+            other => {
+                return Err(crate::error::Error::field(
+                    TABLE1_NAME,
+                    "time.dt",
+                    format!("run {}: `{other}` is neither seconds nor \"auto\"", s.name),
+                ))
+            }
+        };
+        text = scenario::with_dt(&text, TABLE1_NAME, choice)?;
+    }
     text.insert_str(
         0,
         &format!(

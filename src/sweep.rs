@@ -29,6 +29,10 @@ struct Spec {
     jobs: Option<usize>,
     /// Threads per run (default 1: a sweep is parallel across runs).
     threads: Option<usize>,
+    /// The runs' time step: `"auto"` or seconds (`scenario::with_dt`: the frames' interval
+    /// and eq. 11's decay kept in physical time). Default: the base's own step; the default
+    /// job's is `"auto"`. `sweep --dt` takes precedence.
+    dt: Option<crate::io::scenario::DtDef>,
     /// Every combination of these values.
     #[serde(default)]
     grid: BTreeMap<String, Vec<toml::Value>>,
@@ -129,6 +133,17 @@ fn absolute_files(v: &mut toml::Value, base: &Path) {
 /// output directory are relative to its directory), whose runs are commands of `exe`. Reads
 /// the base scenario and what the scenarios name (meshes, keys files); writes nothing.
 pub fn plan(text: &str, spec_path: &Path, exe: &Path) -> Result<Plan> {
+    plan_with_dt(text, spec_path, exe, None)
+}
+
+/// [`plan`] with the runs' time step `dt` where given (`sweep --dt`), before the spec's.
+pub fn plan_with_dt(
+    text: &str,
+    spec_path: &Path,
+    exe: &Path,
+    dt: Option<crate::io::scenario::DtChoice>,
+) -> Result<Plan> {
+    use crate::io::scenario::{with_dt, DtChoice, DtDef};
     let file = spec_path.display().to_string();
     let spec: Spec = toml::from_str(text).map_err(|e| {
         let line = e.span().map(|r| text[..r.start].matches('\n').count() + 1);
@@ -163,6 +178,25 @@ pub fn plan(text: &str, spec_path: &Path, exe: &Path) -> Result<Plan> {
             let (t, _) = scenario_of(Model::Face, true, &run, Path::new("default job"))?;
             (t, "the default job".to_string(), spec_dir.clone())
         }
+    };
+    let dt = match (dt, spec.dt) {
+        (Some(d), _) => Some(d),
+        (None, Some(DtDef::Seconds(x))) if x.is_finite() && x > 0.0 => Some(DtChoice::Seconds(x)),
+        (None, Some(DtDef::Seconds(x))) => {
+            return Err(err(
+                &file,
+                "dt",
+                format!("must be positive and finite, got {x}"),
+            ))
+        }
+        (None, Some(DtDef::Auto(_))) => Some(DtChoice::Auto),
+        // the default job at dt = "auto", as `run` without an input
+        (None, None) if spec.base.is_none() => Some(DtChoice::Auto),
+        (None, None) => None,
+    };
+    let base_text = match dt {
+        Some(d) => with_dt(&base_text, &base_name, d)?,
+        None => base_text,
     };
     let out = match &spec.out {
         Some(d) => spec_dir.join(d),

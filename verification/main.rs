@@ -16,3 +16,4 @@ mod restick;
 mod saliva;
 mod skfem;
 mod time_integration;
+mod time_step;

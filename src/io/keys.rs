@@ -48,7 +48,18 @@ pub fn parse_keys(text: &str, name: &str, fps: Option<f64>) -> Result<Vec<(f64, 
     if keys.is_empty() {
         return Err(Error::input(name, Location::None, "holds no keys"));
     }
-    Ok(keys.into_iter().map(|(t, v)| (t * scale, v)).collect())
+    let keys: Vec<(f64, f64)> = keys.into_iter().map(|(t, v)| (t * scale, v)).collect();
+    if let Some((i, (t, _))) = keys.iter().enumerate().find(|(_, (t, _))| !t.is_finite()) {
+        return Err(Error::input(
+            name,
+            Location::None,
+            format!(
+                "key {i}: its time is {t} s at keys_fps = {}: not a finite number of seconds",
+                fps.unwrap_or(1.0)
+            ),
+        ));
+    }
+    Ok(keys)
 }
 
 /// The largest keys file read (64 MiB, about four million keys of CSV): the keys are held

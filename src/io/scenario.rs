@@ -418,12 +418,46 @@ pub struct MuscleDef {
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct TimeDef {
-    /// Time step (s).
-    pub dt: f64,
+    /// Time step (s), or `"auto"`: [`AUTO_DT_FRACTION`] (or `dt_fraction`) of the model's
+    /// critical step, rounded down so that a whole number of steps fills `output_interval`.
+    pub dt: DtDef,
     /// Simulated time (s).
     pub total: f64,
-    /// Steps between output frames (default: 100).
+    /// Steps between output frames (default: 100); not with `dt = "auto"`.
     pub output_every: Option<usize>,
+    /// With `dt = "auto"`: seconds between output frames (default 1 ms: 100 steps of Table
+    /// 1's 1e-5 s).
+    pub output_interval: Option<f64>,
+    /// With `dt = "auto"`: the fraction of the critical step (default [`AUTO_DT_FRACTION`]).
+    pub dt_fraction: Option<f64>,
+}
+
+/// `[time] dt`: seconds or `"auto"`.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq)]
+#[serde(untagged)]
+pub enum DtDef {
+    Seconds(f64),
+    Auto(AutoWord),
+}
+
+/// The word `auto`.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq)]
+#[serde(rename_all = "lowercase")]
+pub enum AutoWord {
+    Auto,
+}
+
+/// The fraction of the critical step `2 / omega_max` that `dt = "auto"` takes. The critical
+/// step is that of the undeformed model (`tled::stability`); as the lips deform, stretched
+/// saliva and compressed tissue stiffen and the true limit falls, so a margin is kept: 0.8.
+/// Measured on the paper's scene (issue 30): the wide opening at 85 % of the critical step
+/// ran to the end, its lip gaps within 0.12 mm of the run at Table 1's step.
+pub const AUTO_DT_FRACTION: f64 = 0.8;
+
+/// Table 1's decay of a broken saliva element's forces, 0.99 per step of 1e-5 s, as a decay
+/// time (s): `-1e-5 / ln 0.99`. With `dt = "auto"` the decay is given in physical time.
+pub fn table1_decay_time() -> f64 {
+    -table1::TIME_STEP / table1::DECAY_PER_STEP.ln()
 }
 
 #[derive(Deserialize, Debug, Default)]
@@ -468,12 +502,16 @@ fn too_large(file: &str, bytes: u64) -> Error {
 }
 
 pub fn read(path: &Path) -> Result<Scenario> {
+    parse(&read_text(path)?, path)
+}
+
+/// A scenario file's text, at most [`MAX_SCENARIO_BYTES`].
+pub fn read_text(path: &Path) -> Result<String> {
     let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
     if meta.is_file() && meta.len() > MAX_SCENARIO_BYTES {
         return Err(too_large(&path.display().to_string(), meta.len()));
     }
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    parse(&text, path)
+    std::fs::read_to_string(path).map_err(|e| Error::io(path, e))
 }
 
 /// The scenario text `text` (named `file` in errors) with some values replaced: each
@@ -524,6 +562,95 @@ pub fn with_overrides(text: &str, file: &str, overrides: &[(&str, toml::Value)])
     Ok(toml::to_string(&doc).expect("a TOML table serialises"))
 }
 
+/// A time step chosen on the command line (`--dt auto|SECONDS`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DtChoice {
+    Auto,
+    Seconds(f64),
+}
+
+impl std::str::FromStr for DtChoice {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        if s == "auto" {
+            return Ok(DtChoice::Auto);
+        }
+        match s.parse::<f64>() {
+            Ok(x) if x.is_finite() && x > 0.0 => Ok(DtChoice::Seconds(x)),
+            _ => Err(format!(
+                "`{s}`: give auto or a time step in seconds (a positive number)"
+            )),
+        }
+    }
+}
+
+/// The scenario text `text` (named `file` in errors) run at another time step, with what
+/// depends on the step kept in physical time: the frames' interval (`output_every` steps of
+/// the old step become `output_interval` seconds, or the steps of the new one) and eq. 11's
+/// decay (a `decay_per_step` of the old step becomes the `decay_time` it amounts to). For
+/// `--dt` on `run`, `paper` and `sweep`. Returns the new TOML text (comments are lost).
+pub fn with_dt(text: &str, file: &str, dt: DtChoice) -> Result<String> {
+    let mut doc: toml::Table = toml::from_str(text)
+        .map_err(|e| Error::input(file, line_of(text, e.span()), e.message()))?;
+    let time = doc
+        .get_mut("time")
+        .and_then(|t| t.as_table_mut())
+        .ok_or_else(|| Error::field(file, "time", "missing: --dt needs the scenario's [time]"))?;
+    let num = |v: Option<&toml::Value>| {
+        v.and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+    };
+    let old_dt = num(time.get("dt"));
+    // the frames' interval in seconds, as the scenario has it
+    let interval = match old_dt {
+        Some(d) => {
+            let every = time
+                .get("output_every")
+                .and_then(|v| v.as_integer())
+                .unwrap_or(table1::OUTPUT_EVERY as i64);
+            every as f64 * d
+        }
+        None => num(time.get("output_interval"))
+            .unwrap_or(table1::OUTPUT_EVERY as f64 * table1::TIME_STEP),
+    };
+    time.remove("output_every");
+    time.remove("output_interval");
+    match dt {
+        DtChoice::Auto => {
+            time.insert("dt".into(), toml::Value::String("auto".into()));
+            time.insert("output_interval".into(), toml::Value::Float(interval));
+        }
+        DtChoice::Seconds(x) => {
+            time.remove("dt_fraction");
+            time.insert("dt".into(), toml::Value::Float(x));
+            let every = (interval / x).round().max(1.0);
+            time.insert("output_every".into(), toml::Value::Integer(every as i64));
+        }
+    }
+    // eq. 11's decay in physical time: per step of the old step, or Table 1's
+    let step = old_dt.unwrap_or(table1::TIME_STEP);
+    if let Some(sets) = doc.get_mut("saliva").and_then(|v| v.as_array_mut()) {
+        for set in sets.iter_mut().filter_map(|v| v.as_table_mut()) {
+            if let Some(p) = set.remove("decay_per_step") {
+                let p = num(Some(&p)).unwrap_or(table1::DECAY_PER_STEP);
+                if !(p > 0.0 && p < 1.0) {
+                    return Err(Error::field(
+                        file,
+                        "saliva.decay_per_step",
+                        format!("must be in (0, 1) to become a decay time, got {p}"),
+                    ));
+                }
+                set.insert("decay_time".into(), toml::Value::Float(-step / p.ln()));
+            } else if !set.contains_key("decay_time") {
+                set.insert(
+                    "decay_time".into(),
+                    toml::Value::Float(-step / table1::DECAY_PER_STEP.ln()),
+                );
+            }
+        }
+    }
+    Ok(toml::to_string(&doc).expect("a TOML table serialises"))
+}
+
 fn line_of(text: &str, span: Option<std::ops::Range<usize>>) -> Location {
     match span {
         Some(r) => Location::Line(text[..r.start.min(text.len())].matches('\n').count() + 1),
@@ -561,8 +688,15 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
     }
     let nd = &sf.numerics;
     let default = Numerics::default();
+    let auto = auto_time(&sf.time, f)?;
     let time = TimeSettings {
-        dt: sf.time.dt,
+        // with dt = "auto", one step per frame until the model is built (to check the
+        // settings before that): the step is set from the model's critical step below
+        dt: match (sf.time.dt, auto) {
+            (DtDef::Seconds(dt), _) => dt,
+            (DtDef::Auto(_), Some((interval, _))) => interval,
+            (DtDef::Auto(_), None) => unreachable!("auto_time returns the interval for auto"),
+        },
         total_time: sf.time.total,
         output_every: sf.time.output_every.unwrap_or(table1::OUTPUT_EVERY),
     };
@@ -602,7 +736,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
         });
         s
     });
-    let problem = Problem {
+    let mut problem = Problem {
         source: file.clone(),
         mesh,
         materials,
@@ -613,12 +747,116 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
         additive_constraints: false,
         physics,
     };
+    if let Some((interval, fraction)) = auto {
+        set_auto_step(&mut problem, &sf, interval, fraction, f)?;
+    }
     problem.validate()?;
     Ok(Scenario {
         problem,
         title: sf.title,
         default_output: sf.output.dir.map(|d| base.join(d)),
     })
+}
+
+/// With `dt = "auto"`: the output interval and the fraction, checked (`None` for a fixed
+/// step, where `output_interval` and `dt_fraction` are refused).
+fn auto_time(t: &TimeDef, f: &str) -> Result<Option<(f64, f64)>> {
+    match t.dt {
+        DtDef::Seconds(_) => {
+            for (name, v) in [
+                ("time.output_interval", t.output_interval),
+                ("time.dt_fraction", t.dt_fraction),
+            ] {
+                if v.is_some() {
+                    return Err(Error::field(f, name, "applies to dt = \"auto\" only"));
+                }
+            }
+            Ok(None)
+        }
+        DtDef::Auto(_) => {
+            if t.output_every.is_some() {
+                return Err(Error::field(
+                    f,
+                    "time.output_every",
+                    "with dt = \"auto\" the step is not known in advance: give output_interval (s)",
+                ));
+            }
+            let interval = t
+                .output_interval
+                .unwrap_or(table1::OUTPUT_EVERY as f64 * table1::TIME_STEP);
+            if !(interval.is_finite() && interval > 0.0) {
+                return Err(Error::field(
+                    f,
+                    "time.output_interval",
+                    format!("must be positive and finite, got {interval}"),
+                ));
+            }
+            let fraction = t.dt_fraction.unwrap_or(AUTO_DT_FRACTION);
+            if !(fraction > 0.0 && fraction <= 1.0) {
+                return Err(Error::field(
+                    f,
+                    "time.dt_fraction",
+                    format!("must be in (0, 1], got {fraction}"),
+                ));
+            }
+            Ok(Some((interval, fraction)))
+        }
+    }
+}
+
+/// `dt = "auto"`: the step from the built model's critical step (the largest eigenvalue of
+/// `M^-1 K`, `tled::stability`): `fraction` of it, made smaller so that `interval` is a
+/// whole number of steps (which become `output_every`). The saliva's decay (eq. 11) is then
+/// in physical time: Table 1's 0.99 per 1e-5 s as a decay time where none is given; a
+/// `decay_per_step` is refused (per step of an unknown step).
+fn set_auto_step(
+    problem: &mut Problem,
+    sf: &ScenarioFile,
+    interval: f64,
+    fraction: f64,
+    f: &str,
+) -> Result<()> {
+    use crate::material::saliva::Decay;
+    for (i, def) in sf.saliva.iter().enumerate() {
+        if def.decay_per_step.is_some() {
+            return Err(Error::field(
+                f,
+                format!("saliva[{i}].decay_per_step"),
+                format!(
+                    "with dt = \"auto\" give decay_time (s) instead: Table 1's 0.99 per step of \
+                     1e-5 s is decay_time = {:.5e}",
+                    table1_decay_time()
+                ),
+            ));
+        }
+    }
+    // every other decay is the default (a model's own saliva sets included)
+    for set in problem.physics.saliva.iter_mut() {
+        if let Decay::PerStep(_) = set.params.decay {
+            set.params.decay = Decay::Time(table1_decay_time());
+        }
+    }
+    let d = crate::tled::precompute::Discretisation::new(problem);
+    let report = crate::tled::stability::analyse(problem, &d);
+    let critical = report.critical_time_step;
+    if !(critical.is_finite() && critical > 0.0) {
+        return Err(Error::field(
+            f,
+            "time.dt",
+            format!("\"auto\" needs a finite critical time step; the model's is {critical:e}"),
+        ));
+    }
+    let per_frame = (interval / (fraction * critical)).ceil().max(1.0);
+    if per_frame > crate::problem::MAX_STEPS as f64 {
+        return Err(Error::field(
+            f,
+            "time.output_interval",
+            format!("{interval:e} s is {per_frame:e} steps of the critical step {critical:e} s"),
+        ));
+    }
+    problem.time.output_every = per_frame as usize;
+    problem.time.dt = interval / per_frame;
+    Ok(())
 }
 
 /// The first `nan` or `inf` in the file (TOML allows both), with its key path
@@ -1407,6 +1645,90 @@ fn read_physics(
         });
     }
     Ok(physics)
+}
+
+#[cfg(test)]
+mod dt_tests {
+    use super::*;
+
+    const BLOCK: &str =
+        "[mesh]\ngenerator = \"block\"\nsize = [0.01, 0.01, 0.01]\ncells = [2, 2, 2]\n\
+        [[materials]]\nname = \"tissue\"\nmu = 800.0\nK = 7000.0\ndensity = 1050.0\n\
+        [[fix]]\nnodes = \"z_min\"\n";
+
+    /// `dt = "auto"`: the step is at most 0.8 of the critical step and a whole number of
+    /// steps fills the output interval; what only makes sense with a fixed step is refused.
+    #[test]
+    fn auto_takes_a_fraction_of_the_critical_step() {
+        let text = format!("{BLOCK}[time]\ndt = \"auto\"\ntotal = 0.05\noutput_interval = 0.01\n");
+        let p = parse(&text, Path::new("a.toml")).unwrap().problem;
+        let d = crate::tled::precompute::Discretisation::new(&p);
+        let critical = crate::tled::stability::analyse(&p, &d).critical_time_step;
+        assert!(p.time.dt <= AUTO_DT_FRACTION * critical * (1.0 + 1e-12));
+        assert!(p.time.dt > 0.5 * AUTO_DT_FRACTION * critical);
+        assert!((p.time.dt * p.time.output_every as f64 - 0.01).abs() < 1e-15);
+        let err = |t: &str| parse(t, Path::new("a.toml")).err().unwrap().to_string();
+        let e = err(&format!(
+            "{BLOCK}[time]\ndt = \"auto\"\ntotal = 0.05\noutput_every = 10\n"
+        ));
+        assert!(
+            e.contains("field `time.output_every`") && e.contains("output_interval"),
+            "{e}"
+        );
+        let e = err(&format!(
+            "{BLOCK}[time]\ndt = \"auto\"\ntotal = 0.05\ndt_fraction = 1.5\n"
+        ));
+        assert!(
+            e.contains("field `time.dt_fraction`: must be in (0, 1]"),
+            "{e}"
+        );
+        let e = err(&format!(
+            "{BLOCK}[time]\ndt = 1e-5\ntotal = 0.05\noutput_interval = 0.01\n"
+        ));
+        assert!(
+            e.contains("field `time.output_interval`: applies to dt = \"auto\" only"),
+            "{e}"
+        );
+        let e = err(&format!("{BLOCK}[time]\ndt = \"fast\"\ntotal = 0.05\n"));
+        assert!(e.starts_with("a.toml:"), "{e}");
+    }
+
+    /// `--dt`: the frames' interval and eq. 11's decay kept in physical time.
+    #[test]
+    fn with_dt_keeps_the_frame_interval_and_the_decay_in_seconds() {
+        let text = "[time]\ndt = 1e-5\ntotal = 1.0\noutput_every = 1000\n\
+                    [[saliva]]\nmaterial = \"s\"\ndecay_per_step = 0.99\n[[saliva]]\nmaterial = \"t\"\n";
+        let auto: toml::Table =
+            toml::from_str(&with_dt(text, "t", DtChoice::Auto).unwrap()).unwrap();
+        assert_eq!(auto["time"]["dt"].as_str(), Some("auto"));
+        assert_eq!(
+            auto["time"]["output_interval"].as_float(),
+            Some(1000.0 * 1e-5)
+        );
+        assert!(auto["time"].get("output_every").is_none());
+        let tau = -1e-5 / 0.99_f64.ln();
+        for k in 0..2 {
+            let t = auto["saliva"][k]["decay_time"].as_float().unwrap();
+            assert!((t - tau).abs() < 1e-18, "{t}");
+            assert!(auto["saliva"][k].get("decay_per_step").is_none());
+        }
+        let again = with_dt(
+            &toml::to_string(&auto).unwrap(),
+            "t",
+            DtChoice::Seconds(2e-5),
+        )
+        .unwrap();
+        let again: toml::Table = toml::from_str(&again).unwrap();
+        assert_eq!(again["time"]["dt"].as_float(), Some(2e-5));
+        assert_eq!(again["time"]["output_every"].as_integer(), Some(500));
+        assert!(again["time"].get("output_interval").is_none());
+        assert_eq!(
+            again["saliva"][0]["decay_time"].as_float(),
+            auto["saliva"][0]["decay_time"].as_float()
+        );
+        assert!("0".parse::<DtChoice>().is_err() && "nan".parse::<DtChoice>().is_err());
+        assert_eq!("auto".parse::<DtChoice>(), Ok(DtChoice::Auto));
+    }
 }
 
 #[cfg(test)]

@@ -113,6 +113,11 @@ enum Command {
         /// Run even if the time step exceeds the critical time step.
         #[arg(long)]
         force_dt: bool,
+        /// The time step: `auto` (0.8 of the model's critical step, a whole number of steps
+        /// per frame) or seconds; the frames' interval and eq. 11's decay stay in physical
+        /// time. Default: the scenario's (the default job's is `auto`).
+        #[arg(long, value_name = "auto|SECONDS")]
+        dt: Option<scenario::DtChoice>,
         /// No progress output.
         #[arg(long)]
         quiet: bool,
@@ -260,6 +265,9 @@ enum Command {
         /// Reuse complete runs in OUT/runs (same scenario) and only redraw the figures.
         #[arg(long)]
         reuse: bool,
+        /// The runs' time step (see `run --dt`); default: Table 1's 1e-5 s.
+        #[arg(long, value_name = "auto|SECONDS")]
+        dt: Option<scenario::DtChoice>,
     },
     /// Blend shapes (paper eq. 1): x' = X + sum_i w_i B_i, written as an output frame.
     Blend {
@@ -280,6 +288,10 @@ enum Command {
         /// Write the run directories and the job list only (for GNU parallel, Slurm, ...).
         #[arg(long)]
         plan: bool,
+        /// The runs' time step (see `run --dt`), before the spec's `dt`; default: the
+        /// base's own (the default job's: auto).
+        #[arg(long, value_name = "auto|SECONDS")]
+        dt: Option<scenario::DtChoice>,
     },
     /// Write a finished or interrupted run's animation files again: skin.obj, skin.pc2,
     /// skin.mdd, skin.usda (the user's mesh moved by the model) and the preview, from the
@@ -299,6 +311,47 @@ enum Command {
 }
 
 fn load(args: &InputArgs) -> sticky_lips::Result<(Problem, Option<PathBuf>)> {
+    load_with_dt(args, None)
+}
+
+/// [`load`], at the time step `dt` where given (`scenario::with_dt`; for a NiftySim model
+/// seconds only, the frames' interval kept).
+fn load_with_dt(
+    args: &InputArgs,
+    dt: Option<scenario::DtChoice>,
+) -> sticky_lips::Result<(Problem, Option<PathBuf>)> {
+    let Some(dt) = dt else {
+        return load_plain(args);
+    };
+    let name = args.input.display().to_string();
+    let is_toml = args
+        .input
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    if is_toml {
+        let text = scenario::read_text(&args.input)?;
+        let text = scenario::with_dt(&text, &name, dt)?;
+        let s = scenario::parse(&text, &args.input)?;
+        return Ok((s.problem, s.default_output));
+    }
+    let (mut p, out) = load_plain(args)?;
+    match dt {
+        scenario::DtChoice::Seconds(x) => {
+            let interval = p.time.output_every as f64 * p.time.dt;
+            p.time.output_every = (interval / x).round().max(1.0) as usize;
+            p.time.dt = x;
+            p.validate()?;
+            Ok((p, out))
+        }
+        scenario::DtChoice::Auto => Err(sticky_lips::Error::input(
+            "command line",
+            sticky_lips::error::Location::Field("--dt".into()),
+            format!("auto applies to scenarios (.toml); {name} is a NiftySim model: give seconds"),
+        )),
+    }
+}
+
+fn load_plain(args: &InputArgs) -> sticky_lips::Result<(Problem, Option<PathBuf>)> {
     let ext = args
         .input
         .extension()
@@ -405,17 +458,20 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             backend,
             threads,
             force_dt,
+            dt,
             quiet,
         } => {
+            let default = input.is_none() && restart.is_none();
             let input = InputArgs {
                 input: match (input, &restart) {
                     (Some(i), _) => i,
                     (None, Some(dir)) => checkpoint_input(dir)?,
-                    (None, None) => default_job(out.as_deref())?,
+                    (None, None) => default_job(out.as_deref(), dt)?,
                 },
                 niftysim_compat,
             };
-            let (p, default_out) = load(&input)?;
+            // the default job's scenario already has the step asked for
+            let (p, default_out) = load_with_dt(&input, if default { None } else { dt })?;
             let out = match (&restart, out) {
                 (Some(dir), Some(o)) if o != *dir => {
                     return Err(sticky_lips::Error::input(
@@ -523,9 +579,10 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             )?;
         }
         Command::Blend { input, shapes, out } => blend(&input, &shapes, &out)?,
-        Command::Sweep { spec, plan } => sweep::sweep(&sweep::Options {
+        Command::Sweep { spec, plan, dt } => sweep::sweep(&sweep::Options {
             spec: &spec,
             plan_only: plan,
+            dt,
         })?,
         Command::Export {
             run_dir,
@@ -591,6 +648,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             backend,
             precision,
             reuse,
+            dt,
         } => {
             let progress = if std::io::stderr().is_terminal() {
                 Progress::Bar
@@ -610,6 +668,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                     ModelArg::Procedural => paper::Model::Procedural,
                 },
                 only,
+                dt,
             })?;
         }
         Command::Mouth {
@@ -763,16 +822,24 @@ fn steps_arg(s: &str) -> Result<usize, String> {
 /// `sticky-lips run` without an input: the sticky lips opening on the MakeHuman face (the
 /// paper's `fig4_sticky` run at `--quick` resolution: Table 1, the wide jaw opening), its
 /// scenario written to `OUT/scenario.toml` (OUT: `--out`, else `out/face`) and run from there.
-fn default_job(out: Option<&Path>) -> sticky_lips::Result<PathBuf> {
+fn default_job(out: Option<&Path>, dt: Option<scenario::DtChoice>) -> sticky_lips::Result<PathBuf> {
     use sticky_lips::paper::{scenario_of, spec, Model};
     let dir = out.map_or_else(|| PathBuf::from("out/face"), Path::to_path_buf);
     let path = dir.join("scenario.toml");
     let run = spec(Model::Face, true, "fig4_sticky").expect("the paper defines fig4_sticky");
     let (text, _) = scenario_of(Model::Face, true, &run, &path)?;
     let label = path.display().to_string();
+    // at dt = "auto" unless asked otherwise: the frames every 10 ms and eq. 11's decay in
+    // physical time (Table 1's 0.99 per 1e-5 s), as the paper's run has them
+    let text = scenario::with_dt(&text, &label, dt.unwrap_or(scenario::DtChoice::Auto))?;
     let text = format!(
         "# sticky-lips run (no input given): the sticky lips opening on the MakeHuman face, the\n\
-         # paper's run fig4_sticky at the quick resolution; `sticky-lips run {label}` repeats it.\n{}",
+         # paper's run fig4_sticky at the quick resolution, at dt = {}; `sticky-lips run {label}`\n\
+         # repeats it.\n{}",
+        match dt {
+            Some(scenario::DtChoice::Seconds(x)) => format!("{x:e} s"),
+            _ => "\"auto\" (Table 1's physics, the step from the model's critical step)".into(),
+        },
         sticky_lips::io::scenario::with_overrides(
             &text,
             &label,

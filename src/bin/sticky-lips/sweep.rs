@@ -22,13 +22,15 @@ use sticky_lips::sweep::Job;
 pub struct Options<'a> {
     pub spec: &'a Path,
     pub plan_only: bool,
+    /// The runs' time step (`--dt`), before the spec's.
+    pub dt: Option<sticky_lips::io::scenario::DtChoice>,
 }
 
 pub fn sweep(o: &Options) -> Result<()> {
     let text = std::fs::read_to_string(o.spec).map_err(|e| Error::io(o.spec, e))?;
     // the executable the job lines run (asked before the plan, which puts it in them)
     let exe = std::env::current_exe().map_err(|e| Error::io("sticky-lips", e))?;
-    let plan = sticky_lips::sweep::plan(&text, o.spec, &exe)?;
+    let plan = sticky_lips::sweep::plan_with_dt(&text, o.spec, &exe, o.dt)?;
     let (file, out, base_name, jobs) = (&plan.file, &plan.out, &plan.base_name, &plan.jobs);
     let (threads, jobs_at_once) = (plan.threads, plan.jobs_at_once);
     for j in jobs {
@@ -59,18 +61,37 @@ pub fn sweep(o: &Options) -> Result<()> {
     if o.plan_only {
         return Ok(());
     }
-    let results = run_local(jobs, jobs_at_once)?;
+    let all = run_local(jobs, jobs_at_once)?;
+    let not_started: Vec<&str> = jobs
+        .iter()
+        .zip(&all)
+        .filter(|(_, r)| r.is_none())
+        .map(|(j, _)| j.name.as_str())
+        .collect();
+    let results: Vec<Outcome> = all.into_iter().flatten().collect();
     let failed = results.iter().filter(|r| r.status != Some(0)).count();
     let js = out.join("sweep.json");
+    let stopped = sticky_lips::driver::stop_requested();
     let json = serde_json::to_vec_pretty(&serde_json::json!({
         "spec": file,
         "base": base_name,
         "jobs_at_once": jobs_at_once,
         "threads_per_run": threads,
         "runs": results,
+        "interrupted": stopped,
+        "not_started": not_started,
     }))
     .expect("the sweep summary serialises");
     sticky_lips::io::atomic::write_atomic(&js, &json).map_err(|e| Error::io(&js, e))?;
+    if stopped {
+        return Err(Error::Cancelled(format!(
+            "sweep stopped: {} runs ended ({} of them interrupted or failed), {} not started; {} lists them",
+            results.len(),
+            failed,
+            not_started.len(),
+            js.display()
+        )));
+    }
     println!(
         "sweep: {} of {} runs done, {failed} failed; {}",
         results.len() - failed,
@@ -113,14 +134,26 @@ struct Outcome {
 }
 
 /// Runs the jobs, `at_once` processes at a time, in the list's order; each one's stdout and
-/// stderr go to its directory.
-fn run_local(jobs: &[Job], at_once: usize) -> Result<Vec<Outcome>> {
+/// stderr go to its directory. On SIGINT/SIGTERM no further job starts and the running ones
+/// get SIGTERM (each stops as an interrupted run); the jobs never started are `None`.
+fn run_local(jobs: &[Job], at_once: usize) -> Result<Vec<Option<Outcome>>> {
     use std::process::{Command, Stdio};
     let mut results: Vec<Option<Outcome>> = (0..jobs.len()).map(|_| None).collect();
     let mut running: Vec<(usize, std::process::Child, std::time::Instant)> = Vec::new();
     let mut next = 0;
-    while next < jobs.len() || !running.is_empty() {
-        while next < jobs.len() && running.len() < at_once {
+    let mut forwarded = false;
+    while (next < jobs.len() && !forwarded) || !running.is_empty() {
+        if sticky_lips::driver::stop_requested() && !forwarded {
+            forwarded = true;
+            #[cfg(unix)]
+            for (_, child, _) in &running {
+                // SAFETY: kill(2) on a child this process started and has not reaped
+                unsafe {
+                    libc::kill(child.id() as libc::pid_t, libc::SIGTERM);
+                }
+            }
+        }
+        while !forwarded && next < jobs.len() && running.len() < at_once {
             let j = &jobs[next];
             let log = |n: &str| {
                 let p = j.dir.join(n);
@@ -188,8 +221,5 @@ fn run_local(jobs: &[Job], at_once: usize) -> Result<Vec<Outcome>> {
             }
         }
     }
-    Ok(results
-        .into_iter()
-        .map(|r| r.expect("every job ran"))
-        .collect())
+    Ok(results)
 }

@@ -100,7 +100,13 @@ pub fn partners(s: &QuadSurface, adj: &Adjacency, radius: f64) -> Vec<Option<(f6
         for di in -1..=1 {
             for dj in -1..=1 {
                 for dk in -1..=1 {
-                    for &w in grid.get(&(i + di, j + dj, k + dk)).into_iter().flatten() {
+                    // saturating: a cell index of a huge coordinate is i64::MAX already
+                    let cell = (
+                        i.saturating_add(di),
+                        j.saturating_add(dj),
+                        k.saturating_add(dk),
+                    );
+                    for &w in grid.get(&cell).into_iter().flatten() {
                         if mark[w as usize] == v {
                             continue;
                         }

@@ -546,7 +546,8 @@ fn halves(s: &QuadSurface, ring: &[u32]) -> (Vec<u32>, Vec<u32>) {
         .chain((i1..n).rev().map(|k| r[k]))
         .collect();
     let mean_y = |h: &[u32]| {
-        let inner = &h[1..h.len().saturating_sub(1)];
+        // the vertices between the two ends (a line of one or two vertices: itself)
+        let inner = if h.len() > 2 { &h[1..h.len() - 1] } else { h };
         inner
             .iter()
             .map(|&v| s.vertices[v as usize][1])

@@ -34,6 +34,8 @@ pub struct PaperOptions {
     pub model: Model,
     /// Make only these figures (names of [`figures::TABLE`]); empty: all.
     pub only: Vec<String>,
+    /// The runs' time step where not Table 1's (`--dt`).
+    pub dt: Option<sticky_lips::io::scenario::DtChoice>,
 }
 
 /// What a figure producer has: the options, the finished runs it asked for, the model's

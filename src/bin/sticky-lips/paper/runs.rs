@@ -51,6 +51,16 @@ fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
 pub fn run(opts: &PaperOptions, s: &Spec) -> Result<Run> {
     let label = opts.out.join("runs").join(&s.name).join("scenario.toml");
     let (text, problem) = sticky_lips::paper::scenario_of(opts.model, opts.quick, s, &label)?;
+    // another step where asked (`--dt`): the frames' interval and the decay in physical time
+    let (text, problem) = match opts.dt {
+        None => (text, problem),
+        Some(dt) => {
+            let name = label.display().to_string();
+            let t = sticky_lips::io::scenario::with_dt(&text, &name, dt)?;
+            let p = sticky_lips::io::scenario::parse(&t, &label)?.problem;
+            (t, p)
+        }
+    };
     let dir = opts.out.join("runs").join(&s.name);
     eprintln!(
         "paper: {} ({}; {} hexahedra, {} steps)",

@@ -1,6 +1,7 @@
 //! One producer per figure, listed in [`TABLE`] with the runs each needs.
 
 mod choices;
+mod dt;
 mod fig1;
 mod fig10;
 mod fig11;
@@ -124,6 +125,12 @@ pub const TABLE: &[Figure] = &[
         what: "what sets the zip front's speed",
         runs: |_, quick| study::names(quick),
         produce: study::produce,
+    },
+    Figure {
+        name: "dt",
+        what: "convergence in the time step: the wide opening at six steps",
+        runs: |_, _| dt::names(),
+        produce: dt::produce,
     },
     Figure {
         name: "choices",
