@@ -1,0 +1,102 @@
+#!/usr/bin/env python3
+"""Whole-process timings of the paper's scene (issue 30's target).
+
+The scene: `paper/scenarios/table1.toml` (the MakeHuman face at full resolution, 3392
+hexahedra, 1 s simulated, Table 1's physics), eq. 11's decay in physical time (`--dt`
+converts Table 1's 0.99 per 1e-5 s into its decay time). Configurations, run in turn in each
+round (so that load from other processes hits all alike), each a whole `sticky-lips run`
+process on 2 threads:
+
+  reference   f64 at Table 1's dt = 1e-5 s
+  auto-f64    f64 at dt = "auto" (0.8 of the critical step)
+  auto-f32    f32 at dt = "auto"
+
+For each: the median process wall time, the median stepping time (summary.json), the
+animation files' and preview's time (the run's own log), and against the reference's last
+run: the largest difference of a lip column's opening time (the zip front; frames every
+10 ms) and of the final displacements (relative to the largest).
+
+    .venv/bin/python benches/paper_scene.py            # 3 rounds
+    ROUNDS=5 .venv/bin/python benches/paper_scene.py
+
+Needs the release build (cargo build --release) and numpy + meshio (the test command's .venv).
+"""
+import json
+import os
+import re
+import statistics
+import subprocess
+import sys
+import time
+
+import meshio
+import numpy as np
+
+HERE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+BIN = os.environ.get("BIN", os.path.join(HERE, "target/release/sticky-lips"))
+SCENE = os.path.join(HERE, "paper/scenarios/table1.toml")
+OUT = os.environ.get("OUT", os.path.join(HERE, "target/bench-paper-scene"))
+ROUNDS = int(os.environ.get("ROUNDS", "3"))
+CONFIGS = [
+    ("reference", ["--dt", "1e-5", "--precision", "f64"]),
+    ("auto-f64", ["--dt", "auto", "--precision", "f64"]),
+    ("auto-f32", ["--dt", "auto", "--precision", "f32"]),
+]
+
+
+def run(name, args, k):
+    out = os.path.join(OUT, f"{name}_{k}")
+    t0 = time.perf_counter()
+    p = subprocess.run(
+        [BIN, "run", SCENE, "--threads", "2", "--out", out] + args,
+        capture_output=True, text=True, check=True,
+    )
+    wall = time.perf_counter() - t0
+    s = json.load(open(os.path.join(out, "summary.json")))
+    log = p.stdout + p.stderr
+    m = re.search(r"skin\.usda \(.*?; ([0-9.]+) s\) and preview.*?\(([0-9.]+) s\)", log)
+    files, preview = (float(m.group(1)), float(m.group(2))) if m else (float("nan"),) * 2
+    return out, wall, s["stepping_time"], s["steps"], s["dt"], files, preview
+
+
+def opening_times(out):
+    m = json.load(open(os.path.join(out, "measures.json")))
+    thr = m["open_threshold"]
+    g0 = np.array(m["frames"][0]["gap"])
+    t = []
+    for c in range(len(g0)):
+        ts = [f["time"] for f in m["frames"] if f["gap"][c] - g0[c] > thr]
+        t.append(ts[0] if ts else None)
+    return t
+
+
+def final_u(out):
+    return meshio.read(os.path.join(out, "final.vtu")).point_data["displacement"]
+
+
+def main():
+    os.makedirs(OUT, exist_ok=True)
+    res = {n: [] for n, _ in CONFIGS}
+    for k in range(ROUNDS):
+        for name, args in CONFIGS:
+            res[name].append(run(name, args, k))
+            print(f"round {k}: {name}: {res[name][-1][1]:.2f} s", file=sys.stderr)
+    ref = res["reference"][-1][0]
+    t_ref, u_ref = opening_times(ref), final_u(ref)
+    big = float(np.abs(u_ref).max())
+    print(f"paper scene ({SCENE}), {ROUNDS} rounds, 2 threads; medians")
+    print("| configuration | dt (s) | steps | wall (s) | stepping (s) | animation files (s) | preview (s) | zip front max diff (s) | final displacement max diff / largest |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for name, _ in CONFIGS:
+        r = res[name]
+        out = r[-1][0]
+        t = opening_times(out)
+        dz = max((abs(a - b) if a is not None and b is not None else float("inf"))
+                 if (a is not None or b is not None) else 0.0 for a, b in zip(t, t_ref))
+        du = float(np.abs(final_u(out) - u_ref).max()) / big
+        med = lambda i: statistics.median(x[i] for x in r)
+        print(f"| {name} | {r[-1][4]:.4g} | {r[-1][3]} | {med(1):.2f} | {med(2):.2f} | {med(5):.2f} | {med(6):.2f} | {dz:.3g} | {du:.3g} |")
+
+
+if __name__ == "__main__":
+    main()
