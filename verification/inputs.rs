@@ -652,6 +652,41 @@ fn a_sweep_stops_on_a_signal() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A run that diverges at its first steps (a prescribed displacement of -1000 m at once) says
+/// that its inputs are out of range, not the stepping, with the step, time and element.
+#[test]
+fn a_divergence_at_the_first_step_points_at_the_inputs() {
+    use std::process::Command;
+    let bin = env!("CARGO_BIN_EXE_sticky-lips");
+    let dir = std::env::temp_dir().join(format!("sticky-lips-diverge-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let case = dir.join("absurd.toml");
+    std::fs::write(
+        &case,
+        GOOD_TOML.replace("value = 0.001", "value = -1000.0\nshape = \"step\""),
+    )
+    .unwrap();
+    let o = Command::new(bin)
+        .arg("run")
+        .arg(&case)
+        .args(["--quiet", "--out"])
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("run diverged at step 1")
+            && err.contains("element")
+            && err.contains(
+                "at the first steps: what the run started from or was given is out of range"
+            ),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// `face` honours SIGTERM: stopped in the lip finder of a large head (a rough sheet of
 /// 270 400 quads, 11 s to refuse here), it exits with 130 and the message, and `--out` holds
 /// nothing of it (its outputs are staged and moved in together at the end).
