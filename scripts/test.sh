@@ -177,10 +177,21 @@ test -s "$OUT/paper-quick/fig2_materials.png"
 for f in fig1_sticky_opening fig2_materials fig4_opening_over_time fig6_blend_baseline fig7_slight_opening \
          fig7_gap_profiles fig8_wide_opening fig8_gap_profiles fig9_moisture_bands fig10_asymmetric \
          fig11_textured plot_load_profile plot_zip_front plot_zip_study plot_kglue_sweep plot_open_fraction plot_broken \
-         plot_gap_profiles_dry plot_gap_profiles_sticky plot_asymmetry; do
+         plot_gap_profiles_dry plot_gap_profiles_sticky plot_asymmetry plot_dt_opening plot_dt_open_fraction; do
   test -s "$OUT/paper-quick/$f.png" || { echo "paper --quick did not write $f.png" >&2; exit 1; }
 done
 test -s "$OUT/paper-quick/table1.md" && test -s "$OUT/paper-quick/measured.json"
+# the time-step study on the coarse face: every column opens within one 10 ms frame of the
+# smallest step's, at every step up to 5e-5 s (paper/README.md: 1.1 ms at full resolution)
+"$PY" - "$OUT/paper-quick/measured.json" <<'PYEOF'
+import json, sys
+m = json.load(open(sys.argv[1]))["measured"]["dt"]
+worst = max(p["zip_front_max_difference_s"] for p in m["per_step"])
+orders = [o["order"] for o in m["order_before_breaking"]]
+print(f"dt study (quick): opening times within {worst:.2e} s of the smallest step's; orders {orders}")
+assert worst <= m["output_interval_s"], worst
+assert orders and min(orders) >= 1.8, orders
+PYEOF
 for r in fig4_sticky fig7_sticky; do
   STICKY_LIPS_OUT="$OUT/paper-quick/runs/$r" "$PY" -m pytest -q scripts/check_outputs.py
 done
