@@ -1056,7 +1056,7 @@ pub fn prepare(
             jaw_weight = surf.vertices.iter().map(estimate).collect();
             let n = jaw_weight.iter().filter(|&&w| w >= 0.5).count();
             notes.push(format!(
-                "no jaw weights given: estimated from the mouth ({JAW_WEIGHT_MAX} below it, fading from {JAW_FROM} to {JAW_TO} mouth widths under its centre and over half a width in front of the hinge); {n} of {} kept vertices at 0.5 or more",
+                "no jaw weights given: estimated from the mouth ({JAW_WEIGHT_MAX} below it, fading from {JAW_FROM} to {JAW_TO} mouth widths under its centre, deeper under the corners and higher beyond them as on the MakeHuman rig, and over half a width in front of the hinge); {n} of {} kept vertices at 0.5 or more",
                 jaw_weight.len()
             ));
             head_model.vertices.iter().map(estimate).collect()
@@ -1260,13 +1260,45 @@ const JAW_WEIGHT_MAX: f64 = 0.8;
 const JAW_FROM: f64 = 0.1;
 const JAW_TO: f64 = 0.7;
 
+/// How much deeper (mouth widths) the band lies at a distance `u` from the centre (in half
+/// mouth widths: 1 at a corner) than under the centre, linear between these points: the
+/// MakeHuman rig's weight reaches 0.5 at 21.3-22.0 mm below the centre of its 48.8 mm mouth
+/// under the middle (|x| up to 10 mm), 27.2 mm under the corners (|x| = 25 mm: the skin
+/// below a mouth corner follows the jaw least), 22.0 mm again at |x| = 35 mm and 5.0 mm at
+/// |x| = 50 mm (the cheek over the mandible's body follows it higher up); measured on the
+/// front-most skin of `scripts/makehuman_face.py`'s head. Beyond the last point it stays.
+const JAW_DEPTH: [(f64, f64); 5] = [
+    (0.0, 0.0),
+    (0.41, 0.0),
+    (1.02, 0.107),
+    (1.43, 0.0),
+    (2.05, -0.348),
+];
+
+fn jaw_depth(u: f64) -> f64 {
+    let (first, last) = (JAW_DEPTH[0], JAW_DEPTH[JAW_DEPTH.len() - 1]);
+    if !(u > first.0) {
+        return first.1;
+    }
+    for w in JAW_DEPTH.windows(2) {
+        let ((u0, d0), (u1, d1)) = (w[0], w[1]);
+        if u <= u1 {
+            return d0 + (d1 - d0) * (u - u0) / (u1 - u0);
+        }
+    }
+    last.1
+}
+
 /// A jaw skinning weight where the rig gives none (metres, model frame):
 /// `JAW_WEIGHT_MAX` times a smooth step down from `JAW_FROM` to `JAW_TO` mouth widths below
-/// the mouth centre, times a smooth step over half a mouth width forward of the hinge (the
-/// neck and the back of the head stay).
+/// the mouth centre (deeper or higher by [`JAW_DEPTH`] away from the middle), times a smooth
+/// step over half a mouth width forward of the hinge (the neck and the back of the head
+/// stay).
 pub fn estimated_jaw_weight(p: &[f64; 3], centre: [f64; 3], width: f64, hinge: [f64; 3]) -> f64 {
     let smooth = crate::mesh::skin::smoothstep;
-    let below = (centre[1] - JAW_FROM * width - p[1]) / ((JAW_TO - JAW_FROM) * width);
+    let u = (p[0] - centre[0]).abs() / (0.5 * width);
+    let below =
+        (centre[1] - (JAW_FROM + jaw_depth(u)) * width - p[1]) / ((JAW_TO - JAW_FROM) * width);
     let front = (p[2] - hinge[2]) / (0.5 * width);
     JAW_WEIGHT_MAX * smooth(below) * smooth(front)
 }
@@ -1528,6 +1560,15 @@ mod tests {
         assert_eq!(at(-0.04, 0.1), 0.8);
         assert_eq!(at(-0.04, 0.015), 0.0);
         assert!((at(-0.04, 0.0275) - 0.8 * 0.5).abs() < 1e-12);
+        // across the mouth (the MakeHuman rig's shape): the same under its middle, deeper
+        // under the corners (0.107 widths), higher beyond them, the last depth kept further out
+        let at_x = |x: f64, y: f64| estimated_jaw_weight(&[x, y, 0.1], c, w, hinge);
+        assert_eq!(at_x(0.01, -0.02), at(-0.02, 0.1));
+        assert!((at_x(0.0255, -0.02 - 0.107 * w) - 0.8 * 0.5).abs() < 1e-12);
+        assert!(at_x(-0.0255, -0.02) < at(-0.02, 0.1));
+        assert!((at_x(0.05125, -0.02 + 0.348 * w) - 0.8 * 0.5).abs() < 1e-12);
+        assert_eq!(at_x(-0.08, -0.01), at_x(0.06, -0.01));
+        assert!(at_x(0.06, -0.01) > at(-0.01, 0.1));
     }
 
     #[test]
