@@ -241,11 +241,12 @@ if [ -s "$OUT/makehuman-head/head.obj" ]; then
   # the quad head's loop finder puts them
   "$PY" scripts/face_meshes.py --contours "$OUT/face_meshes/mm_zup/face" "$OUT/face_meshes/cm_xfwd/face" \
     "$OUT/face_meshes/mixed_mm_zup/face" "$OUT/face_meshes/tri_m/face"
-  # heads of other origins and topologies (issue 33; each made, faced and run above): the lips
-  # unzip from near the centre (first opening within 0.2 w); printed only on those that do not
-  # (scripts/face_meshes.py OFF_CENTRE says what was measured: issue 33 left open there)
-  "$PY" scripts/face_meshes.py --zip "$OUT"/face_meshes/{mm_zup,mh_compressed,mh_open}/face/run
-  "$PY" scripts/face_meshes.py --zip-print "$OUT"/face_meshes/{anny_notoes,soma_wrap,soma_base,mh_remesh}/face/run
+  # heads of other origins and topologies (issue 33; each made, faced and run above), with the
+  # rig or without (the jaw estimated): the lips unzip from near the centre (first opening
+  # within 0.2 w); a head that does not would be printed with --zip-print and listed in
+  # scripts/face_meshes.py OFF_CENTRE with what was measured (none is)
+  "$PY" scripts/face_meshes.py --zip "$OUT"/face_meshes/{mm_zup,cm_xfwd,mixed_mm_zup,tri_m,mh_compressed,mh_open}/face/run
+  "$PY" scripts/face_meshes.py --zip "$OUT"/face_meshes/{mm_zup_norig,anny_notoes,soma_wrap,soma_base,mh_remesh}/face/run
 fi
 # a run made without the files (the paper's) gets them from `export`
 "$BIN" export "$OUT/paper-procedural/runs/fig4_sticky"
