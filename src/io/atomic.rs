@@ -127,11 +127,14 @@ pub struct Staging {
     dir: PathBuf,
     out: PathBuf,
     done: bool,
+    /// `out` did not exist before: removed too when dropped without a commit.
+    created_out: bool,
 }
 
 impl Staging {
     /// Creates `out` if needed and the staging directory in it; `name` is the command's.
     pub fn new(out: &Path, name: &str) -> io::Result<Staging> {
+        let created_out = !out.exists();
         fs::create_dir_all(out)?;
         let dir = out.join(format!(".{name}.staging-{}", std::process::id()));
         if dir.exists() {
@@ -146,6 +149,7 @@ impl Staging {
             dir,
             out: out.to_path_buf(),
             done: false,
+            created_out,
         })
     }
 
@@ -178,6 +182,10 @@ impl Drop for Staging {
         if !self.done {
             let _ = fs::remove_dir_all(&self.dir);
             unregister(&self.dir);
+            if self.created_out {
+                // only if still empty: remove_dir refuses a directory with anything in it
+                let _ = fs::remove_dir(&self.out);
+            }
         }
     }
 }
@@ -317,6 +325,13 @@ mod tests {
         assert_eq!(s.commit().unwrap(), vec!["a.txt", "b.txt"]);
         assert_eq!(fs::read(d.join("a.txt")).unwrap(), b"new");
         assert_eq!(fs::read_dir(&d).unwrap().count(), 2);
+        // an output directory it made is removed again when nothing was committed
+        let new_out = d.join("new_out");
+        {
+            let s = Staging::new(&new_out, "t").unwrap();
+            write_atomic(&s.path().join("a.txt"), b"x").unwrap();
+        }
+        assert!(!new_out.exists());
         fs::remove_dir_all(&d).unwrap();
     }
 
