@@ -50,8 +50,9 @@ pub struct RunHistory {
     /// [`displacement_hash`] of the last frame listed: a restart checks it against that
     /// frame's file, so that a checkpoint moved into another run's directory is refused
     /// instead of continuing its own run among the other's frames (absent in checkpoints
-    /// written before it was added: not checked).
-    #[serde(default)]
+    /// written before it was added: not checked; not written when absent, so that such a
+    /// checkpoint re-encodes to its own bytes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub last_frame_hash: Option<String>,
 }
 
