@@ -454,7 +454,7 @@ pub enum AutoWord {
 /// ran to the end, its lip gaps within 0.12 mm of the run at Table 1's step.
 pub const AUTO_DT_FRACTION: f64 = 0.8;
 
-/// Table 1's decay of a broken saliva element's forces, 0.99 per step of 1e-5 s, as a decay
+/// Paper eq. (11): Table 1's decay of a broken saliva element's forces, 0.99 per step of 1e-5 s, as a decay
 /// time (s): `-1e-5 / ln 0.99`. With `dt = "auto"` the decay is given in physical time.
 pub fn table1_decay_time() -> f64 {
     -table1::TIME_STEP / table1::DECAY_PER_STEP.ln()
@@ -804,7 +804,7 @@ fn auto_time(t: &TimeDef, f: &str) -> Result<Option<(f64, f64)>> {
     }
 }
 
-/// `dt = "auto"`: the step from the built model's critical step (the largest eigenvalue of
+/// Paper eq. (3), central differences: `dt = "auto"`: the step from the built model's critical step (the largest eigenvalue of
 /// `M^-1 K`, `tled::stability`): `fraction` of it, made smaller so that `interval` is a
 /// whole number of steps (which become `output_every`). The saliva's decay (eq. 11) is then
 /// in physical time: Table 1's 0.99 per 1e-5 s as a decay time where none is given; a
