@@ -102,6 +102,13 @@ pub struct EnergySeries {
     pub strain: Vec<f64>,
 }
 
+fn one() -> usize {
+    1
+}
+fn is_one(k: &usize) -> bool {
+    *k == 1
+}
+
 /// `summary.json`: what a run did (read back by `paper --reuse`).
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct RunSummary {
@@ -110,6 +117,9 @@ pub struct RunSummary {
     pub steps: usize,
     pub simulated_time: f64,
     pub dt: f64,
+    /// Substeps of the saliva layer per step (`tled::subcycle`); written when more than 1.
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub subcycles: usize,
     pub wall_time: f64,
     /// Wall time of the stepping loop alone (s), without output and precompute.
     pub stepping_time: f64,
@@ -489,6 +499,7 @@ fn run_with<S: Stepper>(
         steps: sim.step_index(),
         simulated_time: sim.time(),
         dt: problem.time.dt,
+        subcycles: problem.numerics.subcycles,
         wall_time: t0.elapsed().as_secs_f64(),
         stepping_time: stepping,
         element_updates_per_second: (steps_here * sim.num_elements()) as f64
@@ -647,6 +658,7 @@ pub fn equilibrium(
             steps: res.newton_iterations,
             simulated_time: problem.time.total_time,
             dt: problem.time.dt,
+            subcycles: 1,
             wall_time: t0.elapsed().as_secs_f64(),
             stepping_time: 0.0,
             element_updates_per_second: 0.0,

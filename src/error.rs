@@ -33,6 +33,12 @@ pub enum Error {
         element: usize,
         element_estimate: f64,
     },
+    /// A subcycled run's large step is above the tissue's critical step.
+    UnstableLargeStep {
+        dt: f64,
+        critical: f64,
+        subcycles: usize,
+    },
     /// The explicit run diverged.
     Diverged {
         step: usize,
@@ -98,6 +104,13 @@ impl fmt::Display for Error {
                 "time step {dt:.4e} s exceeds the critical time step {critical:.4e} s (2/omega_max of M^-1 K); \
                  the limiting element is {element} (its own estimate {element_estimate:.4e} s). \
                  Use a time step of at most {critical:.4e} s, or pass --force-dt to run anyway"
+            ),
+            Error::UnstableLargeStep { dt, critical, subcycles } => write!(
+                f,
+                "the large step {dt:.4e} s of a run with {subcycles} substeps exceeds the \
+                 critical time step of the tissue {critical:.4e} s (the model without the \
+                 saliva's stiffness); use a step of at most {critical:.4e} s, or pass \
+                 --force-dt to run anyway"
             ),
             Error::Diverged { step, time, element, node, reason } => {
                 write!(f, "run diverged at step {step} (t = {time:.6e} s)")?;

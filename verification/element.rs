@@ -47,6 +47,7 @@ pub fn problem(
             hourglass_kappa: 0.075,
             variant,
             niftysim_timing: false,
+            subcycles: 1,
         },
         additive_constraints: false,
         physics: Default::default(),

@@ -15,5 +15,6 @@ mod precision;
 mod restick;
 mod saliva;
 mod skfem;
+mod subcycling;
 mod time_integration;
 mod time_step;

@@ -71,6 +71,7 @@ pub fn block_problem(c: usize, total_time: f64) -> Problem {
             variant: GradientVariant::Centroid,
             // clamped load curve: the top holds at -0.004 m however long criterion steps
             niftysim_timing: false,
+            subcycles: 1,
         },
         additive_constraints: false,
         physics: Default::default(),

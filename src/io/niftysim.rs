@@ -179,6 +179,7 @@ pub fn parse(
             hourglass_kappa: kappa,
             variant,
             niftysim_timing,
+            subcycles: 1,
         },
         additive_constraints: true,
         physics: Default::default(),

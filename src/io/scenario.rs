@@ -430,6 +430,18 @@ pub struct TimeDef {
     pub output_interval: Option<f64>,
     /// With `dt = "auto"`: the fraction of the critical step (default [`AUTO_DT_FRACTION`]).
     pub dt_fraction: Option<f64>,
+    /// Substeps of the saliva layer per step (`tled::subcycle`; default 1, single rate), or
+    /// `"auto"`: as many as the saliva's critical step needs, with `dt = "auto"` a large step
+    /// set by the tissue's critical step.
+    pub subcycles: Option<SubcyclesDef>,
+}
+
+/// `[time] subcycles`: a count or `"auto"`.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq)]
+#[serde(untagged)]
+pub enum SubcyclesDef {
+    Count(i64),
+    Auto(AutoWord),
 }
 
 /// `[time] dt`: seconds or `"auto"`.
@@ -453,6 +465,13 @@ pub enum AutoWord {
 /// Measured on the paper's scene (issue 30): the wide opening at 85 % of the critical step
 /// ran to the end, its lip gaps within 0.12 mm of the run at Table 1's step.
 pub const AUTO_DT_FRACTION: f64 = 0.8;
+
+/// With `subcycles = "auto"` and `dt = "auto"`, the large step is at most this many times
+/// the whole model's critical step (and at most the tissue's): the subcycled scheme
+/// (`tled::subcycle`) was measured free of energy growth, undamped, at 1.8 times it with 4
+/// substeps, and showed slow growth in bands from 2.5 times it (`paper/README.md`,
+/// "Subcycling").
+pub const SUBCYCLED_STEP_RATIO: f64 = 2.0;
 
 /// Paper eq. (11): Table 1's decay of a broken saliva element's forces, 0.99 per step of 1e-5 s, as a decay
 /// time (s): `-1e-5 / ln 0.99`. With `dt = "auto"` the decay is given in physical time.
@@ -705,6 +724,20 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
         hourglass_kappa: nd.hourglass_kappa.unwrap_or(default.hourglass_kappa),
         variant: nd.variant.unwrap_or(default.variant),
         niftysim_timing: false,
+        subcycles: match sf.time.subcycles {
+            None | Some(SubcyclesDef::Auto(_)) => 1,
+            Some(SubcyclesDef::Count(n)) => {
+                let max = crate::tled::subcycle::MAX_SUBCYCLES;
+                if !(1..=max as i64).contains(&n) {
+                    return Err(Error::field(
+                        f,
+                        "time.subcycles",
+                        format!("must be between 1 and {max} (or \"auto\"), got {n}"),
+                    ));
+                }
+                n as usize
+            }
+        },
     };
     // `[time]` and `[numerics]` are checked before the mesh is read or generated: a bad step
     // is refused without the cost of building the model
@@ -747,8 +780,15 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
         additive_constraints: false,
         physics,
     };
+    let auto_subcycles = matches!(sf.time.subcycles, Some(SubcyclesDef::Auto(_)));
     if let Some((interval, fraction)) = auto {
-        set_auto_step(&mut problem, &sf, interval, fraction, f)?;
+        set_auto_step(&mut problem, &sf, interval, fraction, auto_subcycles, f)?;
+    } else if auto_subcycles || problem.numerics.subcycles > 1 {
+        // the substep is not the step: eq. 11's decay must be in seconds
+        decay_in_physical_time(&mut problem, &sf, "time.subcycles", f)?;
+        if auto_subcycles {
+            set_auto_subcycles(&mut problem, f)?;
+        }
     }
     problem.validate()?;
     Ok(Scenario {
@@ -809,11 +849,57 @@ fn auto_time(t: &TimeDef, f: &str) -> Result<Option<(f64, f64)>> {
 /// whole number of steps (which become `output_every`). The saliva's decay (eq. 11) is then
 /// in physical time: Table 1's 0.99 per 1e-5 s as a decay time where none is given; a
 /// `decay_per_step` is refused (per step of an unknown step).
+#[allow(clippy::too_many_arguments)]
 fn set_auto_step(
     problem: &mut Problem,
     sf: &ScenarioFile,
     interval: f64,
     fraction: f64,
+    auto_subcycles: bool,
+    f: &str,
+) -> Result<()> {
+    decay_in_physical_time(problem, sf, "dt = \"auto\"", f)?;
+    let d = crate::tled::precompute::Discretisation::new(problem);
+    let report = crate::tled::stability::analyse(problem, &d);
+    let critical = report.critical_time_step;
+    if !(critical.is_finite() && critical > 0.0) {
+        return Err(Error::field(
+            f,
+            "time.dt",
+            format!("\"auto\" needs a finite critical time step; the model's is {critical:e}"),
+        ));
+    }
+    // the large step's limit: the whole model's, or with subcycling the tissue's (and no
+    // more than k substeps of the whole model's)
+    let k = problem.numerics.subcycles;
+    let tissue = report.tissue_critical_time_step;
+    let limit = match (auto_subcycles, k, tissue) {
+        (true, _, Some(t)) => t.min(SUBCYCLED_STEP_RATIO * critical).max(critical),
+        (false, k, Some(t)) if k > 1 => t.min(k as f64 * critical),
+        _ => critical,
+    };
+    let per_frame = (interval / (fraction * limit)).ceil().max(1.0);
+    if per_frame > crate::problem::MAX_STEPS as f64 {
+        return Err(Error::field(
+            f,
+            "time.output_interval",
+            format!("{interval:e} s is {per_frame:e} steps of the critical step {limit:e} s"),
+        ));
+    }
+    problem.time.output_every = per_frame as usize;
+    problem.time.dt = interval / per_frame;
+    if auto_subcycles {
+        problem.numerics.subcycles = subcycles_for(problem.time.dt, fraction * critical, f)?;
+    }
+    Ok(())
+}
+
+/// Eq. 11's decay in physical time, for a step not known in advance (`why`): Table 1's 0.99
+/// per 1e-5 s as a decay time where none is given; a `decay_per_step` is refused.
+fn decay_in_physical_time(
+    problem: &mut Problem,
+    sf: &ScenarioFile,
+    why: &str,
     f: &str,
 ) -> Result<()> {
     use crate::material::saliva::Decay;
@@ -823,7 +909,7 @@ fn set_auto_step(
                 f,
                 format!("saliva[{i}].decay_per_step"),
                 format!(
-                    "with dt = \"auto\" give decay_time (s) instead: Table 1's 0.99 per step of \
+                    "with {why} give decay_time (s) instead: Table 1's 0.99 per step of \
                      1e-5 s is decay_time = {:.5e}",
                     table1_decay_time()
                 ),
@@ -836,27 +922,32 @@ fn set_auto_step(
             set.params.decay = Decay::Time(table1_decay_time());
         }
     }
-    let d = crate::tled::precompute::Discretisation::new(problem);
-    let report = crate::tled::stability::analyse(problem, &d);
-    let critical = report.critical_time_step;
-    if !(critical.is_finite() && critical > 0.0) {
-        return Err(Error::field(
-            f,
-            "time.dt",
-            format!("\"auto\" needs a finite critical time step; the model's is {critical:e}"),
-        ));
-    }
-    let per_frame = (interval / (fraction * critical)).ceil().max(1.0);
-    if per_frame > crate::problem::MAX_STEPS as f64 {
-        return Err(Error::field(
-            f,
-            "time.output_interval",
-            format!("{interval:e} s is {per_frame:e} steps of the critical step {critical:e} s"),
-        ));
-    }
-    problem.time.output_every = per_frame as usize;
-    problem.time.dt = interval / per_frame;
     Ok(())
+}
+
+/// `subcycles = "auto"` with a fixed step: as many substeps as the whole model's critical
+/// step needs at [`AUTO_DT_FRACTION`] of it.
+fn set_auto_subcycles(problem: &mut Problem, f: &str) -> Result<()> {
+    let d = crate::tled::precompute::Discretisation::new(problem);
+    let critical = crate::tled::stability::analyse(problem, &d).critical_time_step;
+    problem.numerics.subcycles = subcycles_for(problem.time.dt, AUTO_DT_FRACTION * critical, f)?;
+    Ok(())
+}
+
+/// The substeps that bring `dt` to at most `fast` (s), refused above `MAX_SUBCYCLES`.
+fn subcycles_for(dt: f64, fast: f64, f: &str) -> Result<usize> {
+    let max = crate::tled::subcycle::MAX_SUBCYCLES;
+    let k = (dt / fast).ceil().max(1.0);
+    if !(k <= max as f64) {
+        return Err(Error::field(
+            f,
+            "time.subcycles",
+            format!(
+                "\"auto\" would need {k:e} substeps of {fast:e} s in a step of {dt:e} s; at most {max}"
+            ),
+        ));
+    }
+    Ok(k as usize)
 }
 
 /// The first `nan` or `inf` in the file (TOML allows both), with its key path
@@ -1691,6 +1782,78 @@ mod dt_tests {
         );
         let e = err(&format!("{BLOCK}[time]\ndt = \"fast\"\ntotal = 0.05\n"));
         assert!(e.starts_with("a.toml:"), "{e}");
+    }
+
+    /// Two slabs joined by a saliva layer (the stiff part).
+    const SLABS: &str = "[units]\nlength = \"mm\"\n[mesh]\ngenerator = \"layers\"\n\
+        size = [10.0, 10.0, 0.0]\ncells = [2, 2, 0]\nlayers = [\
+        { name = \"lower\", thickness = 5.0, cells = 2 }, \
+        { name = \"layer\", thickness = 0.5, cells = 1 }, \
+        { name = \"upper\", thickness = 5.0, cells = 2 }]\n\
+        [[materials]]\nname = \"lo\"\nelements = \"lower\"\nmu = 800.0\nK = 7000.0\ndensity = 1050.0\n\
+        [[materials]]\nname = \"saliva\"\nelements = \"layer\"\nmu = 7700.0\nK = 191000.0\ndensity = 1050.0\n\
+        [[materials]]\nname = \"up\"\nelements = \"upper\"\nmu = 800.0\nK = 7000.0\ndensity = 1050.0\n\
+        [[saliva]]\nmaterial = \"saliva\"\ncritical_moisture = 100.0\ninitial_moisture = 100.0\n\
+        k_glue = 0.05\nevaporation_rate = 0.0\nrule = \"literal\"\n";
+
+    /// `subcycles`: `"auto"` with `dt = "auto"` takes the large step from the tissue's critical
+    /// step (at most `SUBCYCLED_STEP_RATIO` times the whole model's) and enough substeps for
+    /// the saliva; with a fixed step, enough substeps for it; counts out of range, a model
+    /// without saliva and a decay per step are refused, naming the field.
+    #[test]
+    fn subcycles_auto_and_counts() {
+        use crate::material::saliva::Decay;
+        let parse_ok = |t: &str| parse(t, Path::new("s.toml")).unwrap().problem;
+        let p = parse_ok(&format!(
+            "{SLABS}[time]\ndt = \"auto\"\nsubcycles = \"auto\"\ntotal = 0.05\noutput_interval = 0.01\n"
+        ));
+        let d = crate::tled::precompute::Discretisation::new(&p);
+        let r = crate::tled::stability::analyse(&p, &d);
+        let (critical, tissue) = (r.critical_time_step, r.tissue_critical_time_step.unwrap());
+        let k = p.numerics.subcycles;
+        assert!(
+            tissue > 2.0 * critical && k >= 2,
+            "k {k}, {critical:e} {tissue:e}"
+        );
+        let limit = AUTO_DT_FRACTION * tissue.min(SUBCYCLED_STEP_RATIO * critical);
+        assert!(p.time.dt <= limit * (1.0 + 1e-12) && p.time.dt > 0.5 * limit);
+        assert!(p.time.dt / k as f64 <= AUTO_DT_FRACTION * critical * (1.0 + 1e-12));
+        assert!(matches!(p.physics.saliva[0].params.decay, Decay::Time(_)));
+        // a fixed step: the substeps it needs, eq. 11's decay in seconds
+        let p = parse_ok(&format!(
+            "{SLABS}[time]\ndt = 4e-4\nsubcycles = \"auto\"\ntotal = 0.05\n"
+        ));
+        let want = (4e-4 / (AUTO_DT_FRACTION * critical)).ceil() as usize;
+        assert_eq!(p.numerics.subcycles, want);
+        assert!(matches!(p.physics.saliva[0].params.decay, Decay::Time(_)));
+        let p = parse_ok(&format!(
+            "{SLABS}[time]\ndt = 1e-4\nsubcycles = 3\ntotal = 0.05\n"
+        ));
+        assert_eq!(p.numerics.subcycles, 3);
+        let err = |t: &str| parse(t, Path::new("s.toml")).err().unwrap().to_string();
+        for bad in ["0", "65", "-2"] {
+            let e = err(&format!(
+                "{SLABS}[time]\ndt = 1e-4\nsubcycles = {bad}\ntotal = 0.05\n"
+            ));
+            assert!(
+                e.contains("field `time.subcycles`: must be between 1 and 64"),
+                "{e}"
+            );
+        }
+        let e = err(&format!(
+            "{SLABS}decay_per_step = 0.99\n[time]\ndt = 1e-4\nsubcycles = 2\ntotal = 0.05\n"
+        ));
+        assert!(
+            e.contains("field `saliva[0].decay_per_step`") && e.contains("time.subcycles"),
+            "{e}"
+        );
+        let e = err(&format!(
+            "{BLOCK}[time]\ndt = 1e-4\nsubcycles = 2\ntotal = 0.05\n"
+        ));
+        assert!(
+            e.contains("field `time.subcycles`") && e.contains("no saliva element"),
+            "{e}"
+        );
     }
 
     /// `--dt`: the frames' interval and eq. 11's decay kept in physical time.

@@ -53,6 +53,8 @@ pub struct Numerics {
     /// NiftySim's timing quirks (as its 2.5 source steps): `NumSteps + 1` iterations,
     /// unclamped load shapes, external forces lagging one step.
     pub niftysim_timing: bool,
+    /// Substeps of the saliva layer per step (1: single rate; `tled::subcycle`).
+    pub subcycles: usize,
 }
 
 impl Default for Numerics {
@@ -62,6 +64,7 @@ impl Default for Numerics {
             hourglass_kappa: table1::HOURGLASS_KAPPA,
             variant: GradientVariant::MeanGradient,
             niftysim_timing: false,
+            subcycles: 1,
         }
     }
 }
@@ -135,8 +138,58 @@ impl Problem {
         self.validate_saliva(f)?;
         self.validate_wetting(f)?;
         self.validate_muscles(f)?;
+        self.validate_subcycles(f)?;
         if !self.additive_constraints {
             self.validate_one_constraint_per_dof(f)?;
+        }
+        Ok(())
+    }
+
+    /// Subcycling (`tled::subcycle`): between 1 and `MAX_SUBCYCLES` substeps; more than one
+    /// needs saliva elements (the fast partition), eq. 11's decay in physical time (a decay
+    /// per step would change with the substep) and the project's own timing.
+    fn validate_subcycles(&self, f: &str) -> Result<()> {
+        use crate::tled::subcycle::MAX_SUBCYCLES;
+        let k = self.numerics.subcycles;
+        let field = "time.subcycles";
+        if !(1..=MAX_SUBCYCLES).contains(&k) {
+            return Err(Error::field(
+                f,
+                field,
+                format!("must be between 1 and {MAX_SUBCYCLES}, got {k}"),
+            ));
+        }
+        if k == 1 {
+            return Ok(());
+        }
+        let saliva: Vec<u32> = self.physics.saliva.iter().map(|s| s.material).collect();
+        if !self.element_material.iter().any(|m| saliva.contains(m)) {
+            return Err(Error::field(
+                f,
+                field,
+                format!(
+                    "{k} substeps need a saliva layer to subcycle; the model has no saliva element"
+                ),
+            ));
+        }
+        if self.numerics.niftysim_timing {
+            return Err(Error::field(
+                f,
+                field,
+                "subcycling is not available under NiftySim's timing",
+            ));
+        }
+        if let Some(i) = self
+            .physics
+            .saliva
+            .iter()
+            .position(|s| matches!(s.params.decay, crate::material::saliva::Decay::PerStep(_)))
+        {
+            return Err(Error::field(
+                f,
+                format!("saliva[{i}].decay_per_step"),
+                "a subcycled layer needs eq. 11's decay in physical time: give decay_time (s)",
+            ));
         }
         Ok(())
     }

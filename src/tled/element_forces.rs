@@ -150,6 +150,25 @@ impl<T: Real> ElementArrays<T> {
         }
     }
 
+    /// The elements `ids` (in that order) as arrays of their own: element `i` of the result
+    /// is element `ids[i]` of `self`, with the same constants (node indices unchanged).
+    pub fn subset(&self, ids: &[u32]) -> Self {
+        let pick = |e: &u32| *e as usize;
+        let mut el = ElementArrays {
+            conn: ids.iter().map(|e| self.conn[pick(e)]).collect(),
+            dhdx: ids.iter().map(|e| self.dhdx[pick(e)]).collect(),
+            weight: ids.iter().map(|e| self.weight[pick(e)]).collect(),
+            gamma: ids.iter().map(|e| self.gamma[pick(e)]).collect(),
+            hg_k: ids.iter().map(|e| self.hg_k[pick(e)]).collect(),
+            mu: ids.iter().map(|e| self.mu[pick(e)]).collect(),
+            bulk: ids.iter().map(|e| self.bulk[pick(e)]).collect(),
+            block_conn: Vec::new(),
+            block_data: Vec::new(),
+        };
+        el.build_blocks();
+        el
+    }
+
     pub fn len(&self) -> usize {
         self.conn.len()
     }

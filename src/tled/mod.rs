@@ -8,5 +8,6 @@ pub mod saliva_forces;
 pub mod simd;
 pub mod solver;
 pub mod stability;
+pub mod subcycle;
 
 pub use solver::Simulation;

@@ -131,6 +131,49 @@ pub fn node_update<T: Real>(
     (b != usize::MAX).then_some(b)
 }
 
+/// [`node_update`] for the listed nodes only (subcycling: one partition of the nodes).
+/// `a` and `gather` are indexed by node (`gather`'s slots point into `elem_f`); `out[i]`
+/// receives node `nodes[i]`'s new displacement, with the same operations as
+/// [`node_update`]. Returns the smallest listed node with a non-finite result.
+#[allow(clippy::too_many_arguments)]
+pub fn node_update_listed<T: Real>(
+    nodes: &[u32],
+    gather: &NodeGather,
+    cd: &CentralDifference<T>,
+    elem_f: &[[[T; 3]; 8]],
+    r_ext: Option<&[[T; 3]]>,
+    u: &[[T; 3]],
+    u_prev: &[[T; 3]],
+    out: &mut [[T; 3]],
+) -> Option<usize> {
+    assert_eq!(nodes.len(), out.len());
+    let bad = AtomicUsize::new(usize::MAX);
+    let c1 = cd.c1;
+    let corners = elem_f.as_flattened();
+    out.par_chunks_mut(NODE_CHUNK)
+        .zip(nodes.par_chunks(NODE_CHUNK))
+        .for_each(|(chunk, ids)| {
+            let mut first_bad = usize::MAX;
+            for (v, &n) in chunk.iter_mut().zip(ids) {
+                let n = n as usize;
+                let f = gather_slots(gather.of(n), corners);
+                let r = r_ext.map_or([T::ZERO; 3], |r| r[n]);
+                let (un, up, ai) = (u[n], u_prev[n], cd.a[n]);
+                for k in 0..3 {
+                    v[k] = un[k] + ai * (r[k] - f[k]) + c1 * (un[k] - up[k]);
+                }
+                if !(v[0].is_finite() && v[1].is_finite() && v[2].is_finite()) {
+                    first_bad = first_bad.min(n);
+                }
+            }
+            if first_bad != usize::MAX {
+                bad.fetch_min(first_bad, Ordering::Relaxed);
+            }
+        });
+    let b = bad.into_inner();
+    (b != usize::MAX).then_some(b)
+}
+
 /// Internal nodal forces `F_int` (reactions at constrained nodes included) from element blocks.
 pub fn gather_all<T: Real>(
     gather: &NodeGather,

@@ -22,6 +22,39 @@ pub struct ConstraintPlan {
     pub constrained: Vec<bool>,
 }
 
+impl ConstraintPlan {
+    /// The part of the plan that acts on the nodes `keep` marks (subcycling: the constraints
+    /// a substep applies to the fast nodes). `constrained` is kept whole.
+    pub fn restricted_to(&self, keep: &[bool]) -> ConstraintPlan {
+        let k = |dof: &u32| keep[*dof as usize / 3];
+        ConstraintPlan {
+            fixed: self.fixed.iter().copied().filter(k).collect(),
+            prescribed_dofs: self.prescribed_dofs.iter().copied().filter(k).collect(),
+            prescribed: self
+                .prescribed
+                .iter()
+                .map(|(c, e)| (c.clone(), e.iter().copied().filter(|(d, _)| k(d)).collect()))
+                .filter(|(_, e): &(LoadCurve, Vec<(u32, f64)>)| !e.is_empty())
+                .collect(),
+            rotations: self
+                .rotations
+                .iter()
+                .map(|r| PrescribedRotation {
+                    nodes: r
+                        .nodes
+                        .iter()
+                        .copied()
+                        .filter(|&n| keep[n as usize])
+                        .collect(),
+                    ..r.clone()
+                })
+                .filter(|r| !r.nodes.is_empty())
+                .collect(),
+            constrained: self.constrained.clone(),
+        }
+    }
+}
+
 /// External load plan: `R(t) = sum_g curve_g(t) r_g`, each `r_g` sparse.
 #[derive(Clone, Debug)]
 pub struct LoadGroup {

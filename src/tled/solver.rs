@@ -17,6 +17,7 @@ use crate::tled::node_update::{gather_all, node_update, CentralDifference};
 use crate::tled::precompute::Discretisation;
 use crate::tled::saliva_forces::{saliva_forces, SalivaState};
 use crate::tled::simd::SimdReal;
+use crate::tled::subcycle::Subcycling;
 
 /// The solver's state after `step` iterations, every value as `f64` (exact for `f32`).
 #[derive(Clone, Debug, PartialEq)]
@@ -77,6 +78,8 @@ pub struct Simulation<T: Real> {
     dt: f64,
     total_time: f64,
     niftysim_timing: bool,
+    /// The saliva layer's partition when it is subcycled (`numerics.subcycles > 1`).
+    sub: Option<Box<Subcycling<T>>>,
 }
 
 impl<T: SimdReal> Simulation<T> {
@@ -88,6 +91,20 @@ impl<T: SimdReal> Simulation<T> {
         let ne = disc.num_elements();
         let el = ElementArrays::from_discretisation(&disc);
         let cd = CentralDifference::new(problem.time.dt, problem.numerics.damping, &disc.mass);
+        let k = problem.numerics.subcycles;
+        let sub = (k > 1).then(|| {
+            Box::new(Subcycling::new(
+                &disc,
+                &el,
+                k,
+                problem.time.dt,
+                problem.numerics.damping,
+            ))
+        });
+        let saliva = match &sub {
+            Some(s) => SalivaState::new(&s.fast_saliva),
+            None => SalivaState::new(&disc.saliva),
+        };
         Ok(Simulation {
             reference: problem.mesh.nodes.clone(),
             el,
@@ -97,13 +114,14 @@ impl<T: SimdReal> Simulation<T> {
             u_next: vec![[T::ZERO; 3]; nn],
             elem_f: vec![[[T::ZERO; 3]; 8]; ne],
             r_ext: vec![[T::ZERO; 3]; nn],
-            saliva: SalivaState::new(&disc.saliva),
+            saliva,
             prescribed_acc: Vec::with_capacity(disc.constraints.prescribed_dofs.len()),
             step: 0,
             num_steps: problem.num_steps(),
             dt: problem.time.dt,
             total_time: problem.time.total_time,
             niftysim_timing: problem.numerics.niftysim_timing,
+            sub,
             disc,
         })
     }
@@ -219,8 +237,16 @@ impl<T: SimdReal> Simulation<T> {
         Ok(())
     }
 
+    /// Substeps per step (1: single rate).
+    pub fn subcycles(&self) -> usize {
+        self.sub.as_ref().map_or(1, |s| s.k)
+    }
+
     /// Advances one iteration. On divergence the state is left as it was before the step.
     pub fn step(&mut self) -> Result<()> {
+        if self.sub.is_some() {
+            return self.step_subcycled();
+        }
         let s = self.step;
         let t = s as f64 * self.dt;
         if let Some(e) = element_forces(&self.el, &self.u, &mut self.elem_f) {
@@ -279,6 +305,160 @@ impl<T: SimdReal> Simulation<T> {
         Ok(())
     }
 
+    /// One step of `dt` with the saliva layer's nodes in `k` substeps (`tled::subcycle`).
+    fn step_subcycled(&mut self) -> Result<()> {
+        let mut sub = self.sub.take().expect("subcycled");
+        let r = self.step_subcycled_with(&mut sub);
+        self.sub = Some(sub);
+        r
+    }
+
+    fn step_subcycled_with(&mut self, sub: &mut Subcycling<T>) -> Result<()> {
+        use crate::tled::node_update::node_update_listed;
+        let s = self.step;
+        let (dt, k) = (self.dt, sub.k);
+        let h = dt / k as f64;
+        let t = s as f64 * dt;
+        let diverged =
+            |step: usize, time: f64, element: Option<usize>, node: Option<usize>| Error::Diverged {
+                step,
+                time,
+                element,
+                node,
+                reason: match element {
+                    Some(_) => "element inverted or degenerate (det F <= 0 or not finite)".into(),
+                    None => "non-finite displacement".into(),
+                },
+            };
+        // 1. the slow nodes over the whole step, from the forces at t_n
+        if let Some(e) = element_forces(&sub.slow_el, &self.u, &mut sub.slow_f) {
+            return Err(diverged(s, t, Some(sub.slow_ids[e] as usize), None));
+        }
+        let has_loads = !self.disc.loads.is_empty();
+        if has_loads {
+            self.assemble_external_at(t);
+        }
+        let r = has_loads.then_some(self.r_ext.as_slice());
+        if let Some(n) = node_update_listed(
+            &sub.slow_nodes,
+            &sub.slow_gather,
+            &self.cd,
+            &sub.slow_f,
+            r,
+            &self.u,
+            &self.u_prev,
+            &mut sub.slow_next,
+        ) {
+            return Err(diverged(s, t, None, Some(n)));
+        }
+        for (&n, v) in sub.slow_nodes.iter().zip(&sub.slow_next) {
+            self.u_next[n as usize] = *v;
+        }
+        apply_constraints_into(
+            &self.disc,
+            &self.reference,
+            &mut self.u_next,
+            t + dt,
+            true,
+            &mut self.prescribed_acc,
+        );
+        // the state at t_n of what the substeps change, to restore on divergence
+        for (i, &n) in sub.interface.iter().enumerate() {
+            sub.interface_start[i] = self.u[n as usize];
+        }
+        for (i, &n) in sub.fast_nodes.iter().enumerate() {
+            sub.fast_u_start[i] = self.u[n as usize];
+            sub.fast_u_prev_start[i] = self.u_prev[n as usize];
+        }
+        let saliva_start = self.saliva.clone();
+        // 2. the fast nodes in k substeps, the interface interpolated linearly in time
+        let mut failure = None;
+        for j in 0..k {
+            let tj = t + j as f64 * h;
+            if j > 0 {
+                let w = T::from_f64(j as f64 / k as f64);
+                for (i, &n) in sub.interface.iter().enumerate() {
+                    let (a, b) = (sub.interface_start[i], self.u_next[n as usize]);
+                    self.u[n as usize] = [0, 1, 2].map(|c| a[c] + w * (b[c] - a[c]));
+                }
+            }
+            if let Some(e) = element_forces(&sub.fast_el, &self.u, &mut sub.fast_f) {
+                failure = Some(diverged(s, tj, Some(sub.fast_ids[e] as usize), None));
+                break;
+            }
+            saliva_forces(
+                &sub.fast_saliva,
+                &mut self.saliva,
+                &sub.fast_el,
+                &self.u,
+                &mut sub.fast_f,
+                tj,
+            );
+            if has_loads {
+                self.assemble_external_at(tj);
+            }
+            let r = has_loads.then_some(self.r_ext.as_slice());
+            if let Some(n) = node_update_listed(
+                &sub.fast_nodes,
+                &sub.fast_gather,
+                &sub.fast_cd,
+                &sub.fast_f,
+                r,
+                &self.u,
+                &self.u_prev,
+                &mut sub.fast_next,
+            ) {
+                failure = Some(diverged(s, tj, None, Some(n)));
+                break;
+            }
+            for (&n, v) in sub.fast_nodes.iter().zip(&sub.fast_next) {
+                self.u_prev[n as usize] = self.u[n as usize];
+                self.u[n as usize] = *v;
+            }
+            apply_plan_into(
+                &sub.fast_constraints,
+                &self.reference,
+                &mut self.u,
+                tj + h,
+                true,
+                &mut self.prescribed_acc,
+            );
+        }
+        for (i, &n) in sub.interface.iter().enumerate() {
+            self.u[n as usize] = sub.interface_start[i];
+        }
+        if let Some(e) = failure {
+            for (i, &n) in sub.fast_nodes.iter().enumerate() {
+                self.u[n as usize] = sub.fast_u_start[i];
+                self.u_prev[n as usize] = sub.fast_u_prev_start[i];
+            }
+            self.saliva = saliva_start;
+            return Err(e);
+        }
+        // 3. the slow nodes to t_n + dt
+        for &n in &sub.slow_nodes {
+            let n = n as usize;
+            self.u_prev[n] = self.u[n];
+            self.u[n] = self.u_next[n];
+        }
+        self.step += 1;
+        Ok(())
+    }
+
+    /// External forces at time `t` (s), curves clamped (not under NiftySim's timing: a
+    /// subcycled run refuses it).
+    fn assemble_external_at(&mut self, t: f64) {
+        for r in self.r_ext.iter_mut() {
+            *r = [T::ZERO; 3];
+        }
+        for g in &self.disc.loads {
+            let c = g.curve.value(t, true);
+            for &(dof, v) in &g.entries {
+                self.r_ext[dof as usize / 3][dof as usize % 3] += T::from_f64(v * c);
+            }
+        }
+    }
+
     fn constraint_time(&self, s: usize) -> (f64, bool) {
         constraint_time(s, self.dt, self.niftysim_timing)
     }
@@ -321,9 +501,14 @@ impl<T: SimdReal> Simulation<T> {
         let u = self.displacement_f64();
         let mut kinetic = 0.0;
         for n in 0..self.disc.num_nodes {
+            // a subcycled run's fast nodes hold their previous substep
+            let dt = match &self.sub {
+                Some(sub) if sub.is_fast[n] => sub.substep(self.dt),
+                _ => self.dt,
+            };
             let mut v2 = 0.0;
             for k in 0..3 {
-                let v = (self.u[n][k].to_f64() - self.u_prev[n][k].to_f64()) / self.dt;
+                let v = (self.u[n][k].to_f64() - self.u_prev[n][k].to_f64()) / dt;
                 v2 += v * v;
             }
             kinetic += 0.5 * self.disc.mass[n] * v2;
@@ -379,7 +564,18 @@ pub fn apply_constraints_into<T: Real>(
     clamp: bool,
     acc: &mut Vec<f64>,
 ) {
-    let c = &d.constraints;
+    apply_plan_into(&d.constraints, reference, u, t, clamp, acc);
+}
+
+/// [`apply_constraints_into`] for a constraint plan of its own (subcycling's fast nodes).
+pub fn apply_plan_into<T: Real>(
+    c: &crate::tled::precompute::ConstraintPlan,
+    reference: &[[f64; 3]],
+    u: &mut [[T; 3]],
+    t: f64,
+    clamp: bool,
+    acc: &mut Vec<f64>,
+) {
     for &k in &c.fixed {
         u[k as usize / 3][k as usize % 3] = T::ZERO;
     }

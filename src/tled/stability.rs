@@ -27,6 +27,10 @@ pub struct StabilityReport {
     pub limiting_element: usize,
     /// Lanczos iterations used.
     pub iterations: usize,
+    /// For a model with saliva: `2 / omega_max` of the model without the saliva's stiffness
+    /// (s), the limit of a subcycled run's large step (`tled::subcycle`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tissue_critical_time_step: Option<f64>,
 }
 
 /// Per-element estimates `L_e / c_e` (s).
@@ -233,16 +237,36 @@ pub fn analyse(p: &Problem, d: &Discretisation) -> StabilityReport {
     let (lmax, iterations) = largest_eigenvalue(d, 300, 1e-10);
     let omega_max = lmax.max(0.0).sqrt();
     StabilityReport {
-        critical_time_step: if omega_max > 0.0 {
-            2.0 / omega_max
-        } else {
-            f64::INFINITY
-        },
+        critical_time_step: critical_of(lmax),
         omega_max,
         element_estimate,
         limiting_element,
         iterations,
+        tissue_critical_time_step: (!d.saliva.elements.is_empty())
+            .then(|| tissue_critical_time_step(d)),
     }
+}
+
+/// `2 / sqrt(lambda_max)` (infinite for no stiffness).
+fn critical_of(lmax: f64) -> f64 {
+    let omega_max = lmax.max(0.0).sqrt();
+    if omega_max > 0.0 {
+        2.0 / omega_max
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The critical step of `d` with the saliva elements' stiffness (moduli and hourglass
+/// stiffness) removed and every mass kept: what the slow nodes of a subcycled run need
+/// (they touch tissue elements only; by eigenvalue interlacing their own limit is no smaller).
+pub fn tissue_critical_time_step(d: &Discretisation) -> f64 {
+    let mut t = d.clone();
+    for &e in &d.saliva.elements {
+        let e = e as usize;
+        (t.mu[e], t.bulk[e], t.hg_k[e]) = (0.0, 0.0, 0.0);
+    }
+    critical_of(largest_eigenvalue(&t, 300, 1e-10).0)
 }
 
 /// Refuses a time step above the critical one (unless `force`).
@@ -251,13 +275,24 @@ pub fn check_time_step(
     report: &StabilityReport,
     force: bool,
 ) -> crate::error::Result<()> {
-    if p.time.dt > report.critical_time_step && !force {
+    let k = p.numerics.subcycles;
+    let fast = p.time.dt / k as f64;
+    if fast > report.critical_time_step && !force {
         return Err(crate::error::Error::UnstableTimeStep {
-            dt: p.time.dt,
+            dt: fast,
             critical: report.critical_time_step,
             element: report.limiting_element,
             element_estimate: report.element_estimate,
         });
+    }
+    if let (true, Some(tissue)) = (k > 1, report.tissue_critical_time_step) {
+        if p.time.dt > tissue && !force {
+            return Err(crate::error::Error::UnstableLargeStep {
+                dt: p.time.dt,
+                critical: tissue,
+                subcycles: k,
+            });
+        }
     }
     Ok(())
 }

@@ -118,6 +118,11 @@ enum Command {
         /// time. Default: the scenario's (the default job's is `auto`).
         #[arg(long, value_name = "auto|SECONDS")]
         dt: Option<scenario::DtChoice>,
+        /// Substeps of the saliva layer per step (scenarios only; `[time] subcycles`): `auto`
+        /// (as many as the saliva's critical step needs; with `--dt auto` the step is then set
+        /// by the tissue's) or a count (1: single rate).
+        #[arg(long, value_name = "auto|COUNT")]
+        subcycles: Option<SubcyclesArg>,
         /// No progress output.
         #[arg(long)]
         quiet: bool,
@@ -311,7 +316,27 @@ enum Command {
 }
 
 fn load(args: &InputArgs) -> sticky_lips::Result<(Problem, Option<PathBuf>)> {
-    load_with_dt(args, None)
+    load_with_dt(args, None, None)
+}
+
+/// `--subcycles auto|COUNT`.
+#[derive(Clone, Copy, Debug)]
+enum SubcyclesArg {
+    Auto,
+    Count(i64),
+}
+
+impl std::str::FromStr for SubcyclesArg {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match (s, s.parse::<i64>()) {
+            ("auto", _) => Ok(SubcyclesArg::Auto),
+            (_, Ok(n)) if n >= 1 => Ok(SubcyclesArg::Count(n)),
+            _ => Err(format!(
+                "`{s}`: give auto or a whole number of substeps (at least 1)"
+            )),
+        }
+    }
 }
 
 /// [`load`], at the time step `dt` where given (`scenario::with_dt`; for a NiftySim model
@@ -319,15 +344,36 @@ fn load(args: &InputArgs) -> sticky_lips::Result<(Problem, Option<PathBuf>)> {
 fn load_with_dt(
     args: &InputArgs,
     dt: Option<scenario::DtChoice>,
+    subcycles: Option<SubcyclesArg>,
 ) -> sticky_lips::Result<(Problem, Option<PathBuf>)> {
-    let Some(dt) = dt else {
-        return load_plain(args);
-    };
     let name = args.input.display().to_string();
     let is_toml = args
         .input
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    if let Some(k) = subcycles {
+        if !is_toml {
+            return Err(sticky_lips::Error::input(
+                "command line",
+                sticky_lips::error::Location::Field("--subcycles".into()),
+                format!("subcycling applies to scenarios (.toml); {name} is a NiftySim model"),
+            ));
+        }
+        let mut text = scenario::read_text(&args.input)?;
+        if let Some(dt) = dt {
+            text = scenario::with_dt(&text, &name, dt)?;
+        }
+        let value = match k {
+            SubcyclesArg::Auto => toml::Value::String("auto".into()),
+            SubcyclesArg::Count(n) => toml::Value::Integer(n),
+        };
+        let text = scenario::with_overrides(&text, &name, &[("time.subcycles", value)])?;
+        let s = scenario::parse(&text, &args.input)?;
+        return Ok((s.problem, s.default_output));
+    }
+    let Some(dt) = dt else {
+        return load_plain(args);
+    };
     if is_toml {
         let text = scenario::read_text(&args.input)?;
         let text = scenario::with_dt(&text, &name, dt)?;
@@ -459,6 +505,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             threads,
             force_dt,
             dt,
+            subcycles,
             quiet,
         } => {
             let default = input.is_none() && restart.is_none();
@@ -471,7 +518,8 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                 niftysim_compat,
             };
             // the default job's scenario already has the step asked for
-            let (p, default_out) = load_with_dt(&input, if default { None } else { dt })?;
+            let (p, default_out) =
+                load_with_dt(&input, if default { None } else { dt }, subcycles)?;
             let out = match (&restart, out) {
                 (Some(dir), Some(o)) if o != *dir => {
                     return Err(sticky_lips::Error::input(
@@ -737,14 +785,33 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                 "  critical time step 2/omega_max = {:.4e} s ({} Lanczos iterations); per-element estimate {:.4e} s at element {}",
                 r.critical_time_step, r.iterations, r.element_estimate, r.limiting_element
             );
-            let ratio = p.time.dt / r.critical_time_step;
-            if ratio <= 1.0 {
-                println!("  time step is stable ({:.1} % of critical)", 100.0 * ratio);
-            } else {
+            if let Some(t) = r.tissue_critical_time_step {
                 println!(
-                    "  time step is UNSTABLE ({:.1} % of critical): `run` will refuse it",
-                    100.0 * ratio
+                    "  critical time step of the tissue (the saliva's stiffness left out, the limit of a subcycled step) = {t:.4e} s"
                 );
+            }
+            let k = p.numerics.subcycles;
+            let judge = |what: &str, dt: f64, critical: f64| {
+                let ratio = dt / critical;
+                if ratio <= 1.0 {
+                    println!("  {what} is stable ({:.1} % of critical)", 100.0 * ratio);
+                } else {
+                    println!(
+                        "  {what} is UNSTABLE ({:.1} % of critical): `run` will refuse it",
+                        100.0 * ratio
+                    );
+                }
+            };
+            if k > 1 {
+                let tissue = r.tissue_critical_time_step.unwrap_or(f64::INFINITY);
+                judge(
+                    &format!("the saliva's substep dt/{k} = {:e} s", p.time.dt / k as f64),
+                    p.time.dt / k as f64,
+                    r.critical_time_step,
+                );
+                judge("the large step (against the tissue's)", p.time.dt, tissue);
+            } else {
+                judge("time step", p.time.dt, r.critical_time_step);
             }
         }
     }

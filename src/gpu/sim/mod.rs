@@ -130,10 +130,23 @@ pub struct GpuSimulation<T: GpuReal> {
     synced: bool,
 }
 
+/// The GPU path steps every node with one step: a subcycled problem is refused (before an
+/// adapter is looked for).
+fn refuse_subcycles(problem: &Problem) -> Result<()> {
+    match problem.numerics.subcycles {
+        1 => Ok(()),
+        k => Err(Error::Gpu(format!(
+            "the GPU path does not subcycle the saliva layer (time.subcycles = {k}): run it \
+             with --backend cpu, or without subcycles"
+        ))),
+    }
+}
+
 impl<T: GpuReal> GpuSimulation<T> {
     /// Validates the problem, precomputes, finds an adapter and uploads the model.
     pub fn new(problem: &Problem) -> Result<Self> {
         problem.validate()?;
+        refuse_subcycles(problem)?;
         let ctx = GpuContext::new()?;
         Self::with_context(ctx, problem)
     }
@@ -160,6 +173,7 @@ impl<T: GpuReal> GpuSimulation<T> {
                 T::NAME
             )));
         }
+        refuse_subcycles(problem)?;
         if problem.num_steps() >= NEVER as usize {
             return Err(Error::Gpu(format!(
                 "{} steps: the GPU path counts steps in 32 bits (at most {})",

@@ -1,0 +1,212 @@
+//! Subcycling of the saliva layer (`tled::subcycle`, issue 30): nodal-partition subcycling of
+//! central differences (Belytschko, Yen & Mullen 1979) keeps the physics of the single-rate
+//! scheme of paper eq. (3).
+//!
+//! On two tissue slabs joined by a saliva layer (the `examples/sticky_slabs.toml` geometry,
+//! Table 1's materials):
+//! - undamped and free, the total energy shows no growth over a long run at twice the
+//!   saliva's stable step;
+//! - pulled apart, the subcycled displacements converge to the single-rate solution as the
+//!   steps shrink (fixed number of substeps), at second order;
+//! - the bits are the same on 1, 2 and 3 threads;
+//! - the GPU path refuses a subcycled problem with a message.
+
+use std::path::Path;
+use sticky_lips::io::scenario;
+use sticky_lips::tled::Simulation;
+use sticky_lips::Problem;
+
+/// The slabs scenario: `k_glue` sets when the layer breaks; `pull` (mm) the displacement of
+/// the lower face over 0.25 s (0: free, nothing held, no damping).
+fn slabs(dt: f64, total: f64, subcycles: usize, k_glue: f64, pull: f64) -> Problem {
+    let loads = if pull != 0.0 {
+        format!(
+            "[[fix]]\nnodes = \"z_max\"\n\n[[displacement]]\nnodes = \"z_min\"\ndof = \"z\"\n\
+             value = {pull:?}\nshape = \"smooth_step\"\nduration = 0.25\n\n\
+             [numerics]\ndamping = 80.0\n"
+        )
+    } else {
+        String::new()
+    };
+    let text = format!(
+        r#"
+[units]
+length = "mm"
+[mesh]
+generator = "layers"
+size = [10.0, 10.0, 0.0]
+cells = [4, 4, 0]
+layers = [
+  {{ name = "lower", thickness = 5.0, cells = 3 }},
+  {{ name = "saliva_layer", thickness = 0.5, cells = 1 }},
+  {{ name = "upper", thickness = 5.0, cells = 3 }},
+]
+[[materials]]
+name = "tissue lower"
+elements = "lower"
+mu = 800.0
+K = 7000.0
+density = 1050.0
+[[materials]]
+name = "saliva"
+elements = "saliva_layer"
+mu = 7700.0
+K = 191000.0
+density = 1050.0
+[[materials]]
+name = "tissue upper"
+elements = "upper"
+mu = 800.0
+K = 7000.0
+density = 1050.0
+[[saliva]]
+material = "saliva"
+critical_moisture = 100.0
+initial_moisture = 100.0
+k_glue = {k_glue:?}
+evaporation_rate = 0.0
+rule = "literal"
+decay_time = 9.94992e-4
+[time]
+dt = {dt:?}
+total = {total:?}
+output_every = 1
+subcycles = {subcycles}
+{loads}"#
+    );
+    scenario::parse(&text, Path::new("slabs.toml"))
+        .unwrap()
+        .problem
+}
+
+/// Runs `p` to its end on `threads` threads from `u0` at rest (or from rest), returning the
+/// final displacement and the total energy after every step.
+fn run(p: &Problem, threads: usize, u0: Option<&[[f64; 3]]>) -> (Vec<[f64; 3]>, Vec<f64>) {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let mut sim = Simulation::<f64>::new(p).unwrap();
+        if let Some(u0) = u0 {
+            sim.set_state(u0, u0);
+        }
+        let mut energy = Vec::new();
+        while !sim.is_finished() {
+            sim.step().unwrap();
+            let e = sim.energies();
+            energy.push(e.kinetic + e.strain);
+        }
+        (sim.displacement_f64(), energy)
+    })
+}
+
+fn critical_steps(p: &Problem) -> (f64, f64) {
+    let d = sticky_lips::tled::precompute::Discretisation::new(p);
+    let r = sticky_lips::tled::stability::analyse(p, &d);
+    (r.critical_time_step, r.tissue_critical_time_step.unwrap())
+}
+
+fn max_diff(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    a.iter()
+        .flatten()
+        .zip(b.iter().flatten())
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+/// Undamped and free, at twice the saliva's stable step (1.8 times the whole model's
+/// critical step, 4 substeps): the total energy (kinetic from backward differences, strain)
+/// shows no growth over 20 000 steps. (Larger steps, up to the tissue's own limit, show a slow
+/// growth in bands of the step (3 times the critical step: x2.6 over 17 000 steps); the
+/// report is in `paper/README.md`, "Subcycling".)
+#[test]
+fn undamped_subcycled_energy_stays_bounded() {
+    let probe = slabs(1e-5, 1e-5, 1, 1e6, 0.0);
+    let (critical, tissue) = critical_steps(&probe);
+    // the layer is the stiff part: the tissue alone allows a much larger step
+    assert!(
+        tissue > 3.0 * critical,
+        "tissue {tissue:e} s, whole {critical:e} s"
+    );
+    let dt = 1.8 * critical;
+    let k = 4;
+    let steps = 20_000;
+    let p = slabs(dt, steps as f64 * dt, k, 1e6, 0.0);
+    // a smooth stretch of the whole block across the layer (z), released at rest
+    let u0: Vec<[f64; 3]> = p
+        .mesh
+        .nodes
+        .iter()
+        .map(|x| [0.0, 0.0, 0.02 * (x[2] - 0.005) * (1.0 + 20.0 * x[0])])
+        .collect();
+    let (_, e) = run(&p, 2, Some(&u0));
+    let window = |w: &[f64]| w.iter().fold(0.0f64, |m, &x| m.max(x));
+    let quarters: Vec<f64> = e.chunks(steps / 4).map(|w| window(w) / e[0]).collect();
+    eprintln!(
+        "{steps} steps of {dt:.3e} s with {k} substeps (critical {critical:.3e} s, tissue {tissue:.3e} s): energy {:.6e} J, largest per quarter of the run / initial {quarters:.3?}",
+        e[0]
+    );
+    // no growth: the last quarter's largest energy is no more than the first quarter's
+    assert!(
+        quarters[3] <= quarters[0] * 1.01,
+        "energy grows: largest per quarter / initial {quarters:?}"
+    );
+}
+
+#[test]
+fn subcycled_displacements_converge_to_the_single_rate_solution() {
+    // pulled apart, before the layer breaks (k_glue large): 0.03 s
+    let total = 0.03;
+    let k = 4;
+    let h = 1e-4;
+    let reference = run(&slabs(h / 64.0, total, 1, 1e3, -3.0), 2, None).0;
+    let errors: Vec<f64> = [h, h / 2.0, h / 4.0]
+        .iter()
+        .map(|&dt| max_diff(&run(&slabs(dt, total, k, 1e3, -3.0), 2, None).0, &reference))
+        .collect();
+    let scale = reference
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, x| m.max(x.abs()));
+    let order: Vec<f64> = errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+    eprintln!(
+        "subcycled ({k} substeps) vs single rate at {:e} s, largest displacement {scale:.3e} m: errors {errors:?} m, observed order {order:?}",
+        h / 64.0
+    );
+    assert!(errors[2] < 1e-3 * scale);
+    assert!(order.iter().all(|&o| o >= 1.8), "observed order {order:?}");
+}
+
+#[test]
+fn subcycled_runs_give_the_same_bits_on_any_thread_count() {
+    // through the break: the layer lets go within the run
+    let p = slabs(4e-5, 0.25, 4, 0.05, -3.0);
+    let one = run(&p, 1, None).0;
+    for threads in [2, 3] {
+        let other = run(&p, threads, None).0;
+        assert!(
+            one.iter()
+                .flatten()
+                .zip(other.iter().flatten())
+                .all(|(a, b)| a.to_bits() == b.to_bits()),
+            "{threads} threads differ from 1"
+        );
+    }
+}
+
+/// The GPU path does not subcycle: it refuses such a problem with a message that says so
+/// (before looking for an adapter).
+#[cfg(feature = "gpu")]
+#[test]
+fn the_gpu_path_refuses_a_subcycled_problem() {
+    let p = slabs(4e-5, 0.01, 4, 0.05, -3.0);
+    let e = sticky_lips::gpu::GpuSimulation::<f32>::new(&p)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        e.contains("does not subcycle") && e.contains("--backend cpu"),
+        "{e}"
+    );
+}
