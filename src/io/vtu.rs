@@ -437,9 +437,35 @@ pub fn parse_array(
     section: &str,
     name: &str,
 ) -> crate::error::Result<(Vec<f64>, usize, usize)> {
+    let mut arrays = parse_arrays(text, file, &[(section, name)])?;
+    arrays.remove(0)
+}
+
+/// Several arrays of one file's text, the XML parsed once: each `(section, name)` as
+/// [`parse_array`] reads it (an error for malformed XML, else a result per array).
+#[allow(clippy::type_complexity)]
+pub fn parse_arrays(
+    text: &str,
+    file: &str,
+    arrays: &[(&str, &str)],
+) -> crate::error::Result<Vec<crate::error::Result<(Vec<f64>, usize, usize)>>> {
+    use crate::error::{Error, Location};
+    let doc = roxmltree::Document::parse(text)
+        .map_err(|e| Error::input(file, Location::None, format!("malformed XML: {e}")))?;
+    Ok(arrays
+        .iter()
+        .map(|&(section, name)| array_of(&doc, file, section, name))
+        .collect())
+}
+
+fn array_of(
+    doc: &roxmltree::Document,
+    file: &str,
+    section: &str,
+    name: &str,
+) -> crate::error::Result<(Vec<f64>, usize, usize)> {
     use crate::error::{Error, Location};
     let bad = |m: String| Error::input(file, Location::None, m);
-    let doc = roxmltree::Document::parse(text).map_err(|e| bad(format!("malformed XML: {e}")))?;
     let piece = doc
         .descendants()
         .find(|n| n.has_tag_name("Piece"))

@@ -115,24 +115,32 @@ impl Image {
         let f = factor as usize;
         let sw = self.width as usize;
         let mut rgb = vec![0u8; 3 * w as usize * h as usize];
-        let norm = (f * f) as u32;
-        rgb.par_chunks_mut((3 * w as usize).max(1))
-            .enumerate()
-            .for_each(|(y, row)| {
-                for x in 0..w as usize {
-                    let mut acc = [0u32; 3];
-                    for dy in 0..f {
-                        let base = 3 * ((y * f + dy) * sw + x * f);
-                        for dx in 0..f {
-                            for c in 0..3 {
-                                acc[c] += self.rgb[base + 3 * dx + c] as u32;
-                            }
+        // one output row: the factor a constant for the common factors (the division by
+        // `f * f` then a multiplication)
+        fn row_of<const F: usize>(src: &[u8], sw: usize, f: usize, y: usize, row: &mut [u8]) {
+            let f = if F > 0 { F } else { f };
+            let norm = (f * f) as u32;
+            for (x, px) in row.chunks_exact_mut(3).enumerate() {
+                let mut acc = [0u32; 3];
+                for dy in 0..f {
+                    let base = 3 * ((y * f + dy) * sw + x * f);
+                    for dx in 0..f {
+                        for c in 0..3 {
+                            acc[c] += src[base + 3 * dx + c] as u32;
                         }
                     }
-                    for c in 0..3 {
-                        row[3 * x + c] = ((acc[c] + norm / 2) / norm) as u8;
-                    }
                 }
+                for c in 0..3 {
+                    px[c] = ((acc[c] + norm / 2) / norm) as u8;
+                }
+            }
+        }
+        rgb.par_chunks_mut((3 * w as usize).max(1))
+            .enumerate()
+            .for_each(|(y, row)| match f {
+                2 => row_of::<2>(&self.rgb, sw, f, y, row),
+                3 => row_of::<3>(&self.rgb, sw, f, y, row),
+                _ => row_of::<0>(&self.rgb, sw, f, y, row),
             });
         Image {
             width: w,
@@ -152,18 +160,19 @@ impl Image {
         let v = if v.is_finite() { v } else { 0.0 };
         let fx = (u * self.width as f64 - 0.5).clamp(0.0, (self.width - 1) as f64);
         let fy = ((1.0 - v) * self.height as f64 - 0.5).clamp(0.0, (self.height - 1) as f64);
-        let x0 = fx.floor() as u32;
-        let y0 = fy.floor() as u32;
+        // (fx, fy >= 0: the conversion is their floor)
+        let x0 = fx as u32;
+        let y0 = fy as u32;
         let x1 = (x0 + 1).min(self.width - 1);
         let y1 = (y0 + 1).min(self.height - 1);
         let tx = fx - x0 as f64;
         let ty = fy - y0 as f64;
-        let (a, b, c, d) = (
-            self.get(x0, y0),
-            self.get(x1, y0),
-            self.get(x0, y1),
-            self.get(x1, y1),
-        );
+        // (x0, x1 and y0, y1 are within the image)
+        let texel = |x: u32, y: u32| {
+            let i = 3 * (y as usize * self.width as usize + x as usize);
+            [self.rgb[i], self.rgb[i + 1], self.rgb[i + 2]]
+        };
+        let (a, b, c, d) = (texel(x0, y0), texel(x1, y0), texel(x0, y1), texel(x1, y1));
         std::array::from_fn(|k| {
             let top = a[k] as f64 * (1.0 - tx) + b[k] as f64 * tx;
             let bottom = c[k] as f64 * (1.0 - tx) + d[k] as f64 * tx;
@@ -665,6 +674,11 @@ fn lambert(n: [f64; 3], lights: &[([f64; 3], f64)], ambient: f64) -> f64 {
 
 /// Rasterizes `triangles` seen from `camera` into an `options.width x options.height`
 /// image. `texture` is sampled for the triangles that have texture coordinates.
+///
+/// A depth pass first finds the triangle seen at each sample (the nearest; of equally near
+/// ones the first in `triangles`), then each sample is shaded once, by that triangle: the
+/// image drawing the triangles in order over each other with a depth test gives, without
+/// shading the samples that a nearer triangle covers later.
 pub fn rasterize(
     triangles: &[Triangle],
     texture: Option<&Image>,
@@ -836,15 +850,33 @@ pub fn rasterize(
         .for_each(|(band, cbuf)| {
             let rows = cbuf.len() / (3 * w as usize);
             let y0 = band * band_rows;
+            // the depth pass: the triangle seen at each sample (the first in order of those
+            // nearest), then each sample shaded once, by that triangle (the same colour as
+            // drawing the triangles in order over each other, without shading the hidden ones)
             let mut depth = vec![f64::NEG_INFINITY; rows * w as usize];
-            for px in cbuf.chunks_exact_mut(3) {
-                px.copy_from_slice(&bg);
-            }
+            let mut seen = vec![u32::MAX; rows * w as usize];
             for &ti in &bins[band] {
-                let t = &screen[ti as usize];
-                draw_triangle(
-                    t, texture, &lights, options, wire, w as usize, y0, rows, cbuf, &mut depth,
+                cover_triangle(
+                    &screen[ti as usize],
+                    ti,
+                    w as usize,
+                    y0,
+                    rows,
+                    &mut depth,
+                    &mut seen,
                 );
+            }
+            for (r, (row, seen)) in cbuf
+                .chunks_exact_mut(3 * w as usize)
+                .zip(seen.chunks_exact(w as usize))
+                .enumerate()
+            {
+                for (x, (px, &ti)) in row.chunks_exact_mut(3).zip(seen).enumerate() {
+                    px.copy_from_slice(&match screen.get(ti as usize) {
+                        Some(t) => shade_sample(t, texture, &lights, options, wire, x, y0 + r),
+                        None => bg,
+                    });
+                }
             }
         });
     let img = Image {
@@ -855,25 +887,35 @@ pub fn rasterize(
     img.downsample(ss)
 }
 
-#[allow(clippy::too_many_arguments)]
-fn draw_triangle(
+/// The triangle's signed double area in pixels and its barycentric weights at the centre of
+/// sample `(x, y)` (normalised edge functions).
+fn barycentric(t: &ScreenTriangle, x: usize, y: usize) -> (f64, [f64; 3]) {
+    let [a, b, c] = t.v;
+    let area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+    let inv_area = 1.0 / area;
+    let (px, py) = (x as f64 + 0.5, y as f64 + 0.5);
+    let l0 = ((b.x - px) * (c.y - py) - (b.y - py) * (c.x - px)) * inv_area;
+    let l1 = ((c.x - px) * (a.y - py) - (c.y - py) * (a.x - px)) * inv_area;
+    (area, [l0, l1, 1.0 - l0 - l1])
+}
+
+/// The depth pass of one triangle over the band of `rows` rows from `y0`: where it covers a
+/// sample and is nearer than what is there, its depth key and index `ti` go to `depth` and
+/// `seen`.
+fn cover_triangle(
     t: &ScreenTriangle,
-    texture: Option<&Image>,
-    lights: &[([f64; 3], f64)],
-    options: &RenderOptions,
-    wire: Option<([f64; 3], f64)>,
+    ti: u32,
     w: usize,
     y0: usize,
     rows: usize,
-    cbuf: &mut [u8],
     depth: &mut [f64],
+    seen: &mut [u32],
 ) {
     let [a, b, c] = t.v;
     let area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
     if !(area.abs() > 1e-12) {
         return;
     }
-    let inv_area = 1.0 / area;
     // Inclusive edge test with a tolerance relative to the triangle, so that pixel
     // centres on a shared edge are covered by at least one of the two triangles.
     let eps = -1e-9;
@@ -891,20 +933,9 @@ fn draw_triangle(
         return;
     }
     let ry1 = ry1 as usize;
-    // Edge lengths for wireframe distances (edge i: vertex i -> i+1, opposite vertex i+2).
-    let pts = [(a.x, a.y), (b.x, b.y), (c.x, c.y)];
-    let edge_len: [f64; 3] = std::array::from_fn(|i| {
-        let (p, q) = (pts[i], pts[(i + 1) % 3]);
-        ((q.0 - p.0).powi(2) + (q.1 - p.1).powi(2)).sqrt()
-    });
     for y in ry0..=ry1 {
-        let py = y as f64 + 0.5;
         for x in x_lo..=x_hi {
-            let px = x as f64 + 0.5;
-            // Barycentric weights (normalised edge functions).
-            let l0 = ((b.x - px) * (c.y - py) - (b.y - py) * (c.x - px)) * inv_area;
-            let l1 = ((c.x - px) * (a.y - py) - (c.y - py) * (a.x - px)) * inv_area;
-            let l2 = 1.0 - l0 - l1;
+            let (_, [l0, l1, l2]) = barycentric(t, x, y);
             if l0 < eps || l1 < eps || l2 < eps {
                 continue;
             }
@@ -914,56 +945,93 @@ fn draw_triangle(
                 continue;
             }
             depth[di] = key;
-            // Perspective-correct weights.
-            let q0 = l0 * a.w;
-            let q1 = l1 * b.w;
-            let q2 = l2 * c.w;
-            let qs = q0 + q1 + q2;
-            let (q0, q1, q2) = (q0 / qs, q1 / qs, q2 / qs);
-            let albedo = if t.textured {
-                let u = q0 * a.attr.uv[0] + q1 * b.attr.uv[0] + q2 * c.attr.uv[0];
-                let v = q0 * a.attr.uv[1] + q1 * b.attr.uv[1] + q2 * c.attr.uv[1];
-                texture
-                    .map(|tex| tex.sample_bilinear(u, v))
-                    .unwrap_or(t.colour)
-            } else if t.vertex_coloured {
-                std::array::from_fn(|k| {
-                    q0 * a.attr.colour[k] + q1 * b.attr.colour[k] + q2 * c.attr.colour[k]
-                })
-            } else {
-                t.colour
-            };
-            let light = match options.shading {
-                Shading::Flat => t.flat_light,
-                Shading::Gouraud => q0 * a.attr.light + q1 * b.attr.light + q2 * c.attr.light,
-                Shading::Smooth => {
-                    let n = normalize(add(
-                        add(scale(a.attr.normal, q0), scale(b.attr.normal, q1)),
-                        scale(c.attr.normal, q2),
-                    ));
-                    lambert(n, lights, options.ambient)
-                }
-            }
-            .clamp(0.0, 1.0);
-            let mut col = albedo.map(|c| c * light);
-            if let Some((wc, half)) = wire {
-                if t.edges != 0 {
-                    let l = [l2, l0, l1]; // weight of the vertex opposite edge i
-                    for i in 0..3 {
-                        if t.edges & (1 << i) != 0 {
-                            // distance = barycentric * 2 area / edge length
-                            let dist = l[i] * area.abs() / edge_len[i].max(1e-12);
-                            if dist <= half {
-                                col = wc;
-                            }
-                        }
+            seen[di] = ti;
+        }
+    }
+}
+
+/// The colour of sample `(x, y)` of a triangle that covers it.
+#[allow(clippy::too_many_arguments)]
+fn shade_sample(
+    t: &ScreenTriangle,
+    texture: Option<&Image>,
+    lights: &[([f64; 3], f64)],
+    options: &RenderOptions,
+    wire: Option<([f64; 3], f64)>,
+    x: usize,
+    y: usize,
+) -> [u8; 3] {
+    let [a, b, c] = t.v;
+    let (area, [l0, l1, l2]) = barycentric(t, x, y);
+    // Perspective-correct weights.
+    let q0 = l0 * a.w;
+    let q1 = l1 * b.w;
+    let q2 = l2 * c.w;
+    let qs = q0 + q1 + q2;
+    let (q0, q1, q2) = (q0 / qs, q1 / qs, q2 / qs);
+    let albedo = if t.textured {
+        let u = q0 * a.attr.uv[0] + q1 * b.attr.uv[0] + q2 * c.attr.uv[0];
+        let v = q0 * a.attr.uv[1] + q1 * b.attr.uv[1] + q2 * c.attr.uv[1];
+        texture
+            .map(|tex| tex.sample_bilinear(u, v))
+            .unwrap_or(t.colour)
+    } else if t.vertex_coloured {
+        std::array::from_fn(|k| {
+            q0 * a.attr.colour[k] + q1 * b.attr.colour[k] + q2 * c.attr.colour[k]
+        })
+    } else {
+        t.colour
+    };
+    let light = match options.shading {
+        Shading::Flat => t.flat_light,
+        Shading::Gouraud => q0 * a.attr.light + q1 * b.attr.light + q2 * c.attr.light,
+        Shading::Smooth => {
+            let n = normalize(add(
+                add(scale(a.attr.normal, q0), scale(b.attr.normal, q1)),
+                scale(c.attr.normal, q2),
+            ));
+            lambert(n, lights, options.ambient)
+        }
+    }
+    .clamp(0.0, 1.0);
+    let mut col = albedo.map(|c| c * light);
+    if let Some((wc, half)) = wire {
+        if t.edges != 0 {
+            // Edge lengths (edge i: vertex i -> i+1, opposite vertex i+2).
+            let pts = [(a.x, a.y), (b.x, b.y), (c.x, c.y)];
+            let l = [l2, l0, l1]; // weight of the vertex opposite edge i
+            for i in 0..3 {
+                if t.edges & (1 << i) != 0 {
+                    let (p, q) = (pts[i], pts[(i + 1) % 3]);
+                    let edge_len = ((q.0 - p.0).powi(2) + (q.1 - p.1).powi(2)).sqrt();
+                    // distance = barycentric * 2 area / edge length
+                    let dist = l[i] * area.abs() / edge_len.max(1e-12);
+                    if dist <= half {
+                        col = wc;
                     }
                 }
             }
-            let ci = 3 * di;
-            for k in 0..3 {
-                cbuf[ci + k] = col[k].round().clamp(0.0, 255.0) as u8;
-            }
         }
+    }
+    col.map(|c| round_half_away(c).clamp(0.0, 255.0) as u8)
+}
+
+/// `x.round()` (half away from zero; but +0 for -0.5 < x < 0), without the call to the C
+/// library's `round` that `f64::round` is on the baseline x86-64 target: the truncation is
+/// exact below 2^52 and so is the fraction `x - trunc(x)`; NaN and larger magnitudes are
+/// returned as they are (whole numbers there).
+#[inline]
+pub(crate) fn round_half_away(x: f64) -> f64 {
+    if !(x.abs() < 4_503_599_627_370_496.0) {
+        return x;
+    }
+    let t = x as i64 as f64;
+    let frac = x - t;
+    if frac >= 0.5 {
+        t + 1.0
+    } else if frac <= -0.5 {
+        t - 1.0
+    } else {
+        t
     }
 }

@@ -779,3 +779,41 @@ fn a_soft_crease_is_continuous_in_the_angle_and_a_hard_one_is_the_old_rule() {
     assert!(hard[f].iter().all(|c| dot(*c, n) > 1.0 - 1e-12));
     assert!(soft[f].iter().any(|c| dot(*c, n) < 0.99));
 }
+
+#[test]
+fn round_half_away_is_f64_round() {
+    use super::raster::round_half_away;
+    let mut xs = vec![
+        0.0,
+        0.5,
+        1.5,
+        2.5,
+        254.5,
+        255.49999999999997,
+        0.49999999999999994,
+        -0.5,
+        -1.5,
+        -2.4999999999999996,
+        4503599627370495.5,
+        4503599627370497.0,
+        1e300,
+        -1e300,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    let mut s = 0x2545f4914f6cdd1d_u64;
+    for _ in 0..100_000 {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        xs.push((s >> 11) as f64 / (1u64 << 53) as f64 * 600.0 - 300.0);
+        xs.push(f64::from_bits(s));
+    }
+    for x in xs {
+        let (a, b) = (round_half_away(x), x.round());
+        assert!(
+            a == b || (a.is_nan() && b.is_nan()),
+            "{x:e}: {a} against {b}"
+        );
+    }
+}

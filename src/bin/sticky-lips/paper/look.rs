@@ -263,7 +263,8 @@ impl Membrane {
     }
 }
 
-/// Renders the mesh of `p` displaced by `u`, without the `hidden` elements, on `background`.
+/// Renders the mesh of `p` displaced by `u`, without the `hidden` elements, on `background`
+/// (3x supersampling, [`RenderOptions::new`]).
 #[allow(clippy::too_many_arguments)]
 pub fn render(
     p: &Problem,
@@ -274,6 +275,39 @@ pub fn render(
     background: [u8; 3],
     w: u32,
     h: u32,
+) -> Image {
+    let supersample = RenderOptions::new(w, h).supersample;
+    let quality = Quality {
+        supersample,
+        cull: false,
+    };
+    render_with(p, cols, u, hidden, paint, background, w, h, quality)
+}
+
+/// How finely [`render_with`] renders.
+#[derive(Clone, Copy, Debug)]
+pub struct Quality {
+    /// `supersample x supersample` samples per pixel.
+    pub supersample: u32,
+    /// Leave out the tissue's triangles that face away from the camera. The tissue's
+    /// boundary is closed and oriented outward, so that these lie behind its front: the
+    /// picture is the same but where a sample falls on a silhouette edge to within rounding.
+    /// The saliva membrane is two-sided and always drawn.
+    pub cull: bool,
+}
+
+/// [`render`] with the [`Quality`] given (the run's preview takes less, for its cost).
+#[allow(clippy::too_many_arguments)]
+pub fn render_with(
+    p: &Problem,
+    cols: &LipColumns,
+    u: &[[f64; 3]],
+    hidden: &[bool],
+    paint: Paint,
+    background: [u8; 3],
+    w: u32,
+    h: u32,
+    quality: Quality,
 ) -> Image {
     let x: Vec<[f64; 3]> = p
         .mesh
@@ -357,10 +391,28 @@ pub fn render(
         Paint::Elements(_) => None,
         Paint::Texture(t) | Paint::TextureAndSaliva(t, _) => Some(*t),
     };
-    let tris = paint_triangles(&x, &faces, &normals, &face_paint, uv.as_deref());
+    let mut tris = paint_triangles(&x, &faces, &normals, &face_paint, uv.as_deref());
     let cam = mouth_camera(p, cols, w as f64 / h as f64);
+    if quality.cull {
+        // two triangles a face, the tissue's faces first
+        let tissue = 2 * (faces.len() - membrane.faces.len());
+        let mut k = 0;
+        tris.retain(|t| {
+            k += 1;
+            let [a, b, c] = t.positions;
+            let d = |p: [f64; 3], q: [f64; 3]| [0, 1, 2].map(|i| p[i] - q[i]);
+            let (e1, e2, v) = (d(b, a), d(c, a), d(cam.eye, a));
+            let n = [
+                e1[1] * e2[2] - e1[2] * e2[1],
+                e1[2] * e2[0] - e1[0] * e2[2],
+                e1[0] * e2[1] - e1[1] * e2[0],
+            ];
+            k > tissue || n[0] * v[0] + n[1] * v[1] + n[2] * v[2] >= 0.0
+        });
+    }
     let mut o = RenderOptions::new(w, h);
     o.background = background;
+    o.supersample = quality.supersample;
     rasterize(&tris, texture, &cam, &o)
 }
 
@@ -400,6 +452,23 @@ fn sample(img: &Image, u: f64, v: f64) -> u8 {
     let x = ((u.clamp(0.0, 1.0) * img.width as f64) as u32).min(img.width - 1);
     let y = (((1.0 - v.clamp(0.0, 1.0)) * img.height as f64) as u32).min(img.height - 1);
     img.get(x, y)[0]
+}
+
+/// The MakeHuman head's CC0 masks compiled into the binary (MPFB's face and lips masks,
+/// greyscale in the body's UV layout), decoded: `(face, lips)`, `None` where one does not
+/// decode.
+pub fn makehuman_masks() -> (Option<Image>, Option<Image>) {
+    let decode = |bytes: &[u8]| sticky_lips::render::decode_jpeg(bytes).ok();
+    (
+        decode(sticky_lips::mesh::face::MAKEHUMAN_FACE_TEXTURE),
+        decode(sticky_lips::mesh::face::MAKEHUMAN_LIPS_TEXTURE),
+    )
+}
+
+/// The face's skin texture, as the figures of the face and the previews of its runs use it:
+/// [`skin_texture`] of the masks, 1024 pixels square.
+pub fn face_skin(face: &Image, lips: &Image) -> Image {
+    skin_texture(face, lips, 1024)
 }
 
 /// The skin texture of Fig. 11 from the CC0 masks of the MakeHuman head (the body's UV

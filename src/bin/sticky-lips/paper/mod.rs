@@ -111,11 +111,9 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
         let r = runs::run(opts, spec)?;
         done.insert(spec.name.clone(), r);
     }
-    let decode = |bytes: &[u8]| sticky_lips::render::decode_jpeg(bytes).ok();
-    let lips_mask = decode(sticky_lips::mesh::face::MAKEHUMAN_LIPS_TEXTURE);
-    let face_mask = decode(sticky_lips::mesh::face::MAKEHUMAN_FACE_TEXTURE);
+    let (face_mask, lips_mask) = look::makehuman_masks();
     let skin = match (opts.model, &face_mask, &lips_mask) {
-        (Model::Face, Some(f), Some(l)) => Some(look::skin_texture(f, l, 1024)),
+        (Model::Face, Some(f), Some(l)) => Some(look::face_skin(f, l)),
         _ => None,
     };
     let ctx = Context {
