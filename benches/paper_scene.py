@@ -10,14 +10,20 @@ process on 2 threads:
   reference   f64 at Table 1's dt = 1e-5 s
   auto-f64    f64 at dt = "auto" (0.8 of the critical step)
   auto-f32    f32 at dt = "auto"
+  sub-f64     f64 at dt = "auto" with the saliva subcycled (--subcycles auto: the large
+              step 0.8 of min(tissue's critical step, 2 x the whole model's), substeps for
+              the saliva)
+  sub-f32     the same in f32
 
 For each: the median process wall time, the median stepping time (summary.json), the
 animation files' and preview's time (the run's own log), and against the reference's last
-run: the largest difference of a lip column's opening time (the zip front; frames every
-10 ms) and of the final displacements (relative to the largest).
+run: the largest difference of a lip column's opening time (the zip front: the time its gap
+first exceeds the open threshold, interpolated linearly between the frames, 10 ms apart) and
+of the final displacements (relative to the largest).
 
     .venv/bin/python benches/paper_scene.py            # 3 rounds
     ROUNDS=5 .venv/bin/python benches/paper_scene.py
+    ONLY=sub-f64,sub-f32 REF_DIR=target/bench-paper-scene/reference_2 .venv/bin/python benches/paper_scene.py
 
 Needs the release build (cargo build --release) and numpy + meshio (the test command's .venv).
 """
@@ -41,7 +47,12 @@ CONFIGS = [
     ("reference", ["--dt", "1e-5", "--precision", "f64"]),
     ("auto-f64", ["--dt", "auto", "--precision", "f64"]),
     ("auto-f32", ["--dt", "auto", "--precision", "f32"]),
+    ("sub-f64", ["--dt", "auto", "--subcycles", "auto", "--precision", "f64"]),
+    ("sub-f32", ["--dt", "auto", "--subcycles", "auto", "--precision", "f32"]),
 ]
+ONLY = os.environ.get("ONLY")  # e.g. ONLY=reference,sub-f32
+if ONLY:
+    CONFIGS = [c for c in CONFIGS if c[0] in ONLY.split(",")]
 
 
 def run(name, args, k):
@@ -56,17 +67,25 @@ def run(name, args, k):
     log = p.stdout + p.stderr
     m = re.search(r"skin\.usda \(.*?; ([0-9.]+) s\) and preview.*?\(([0-9.]+) s\)", log)
     files, preview = (float(m.group(1)), float(m.group(2))) if m else (float("nan"),) * 2
-    return out, wall, s["stepping_time"], s["steps"], s["dt"], files, preview
+    return out, wall, s["stepping_time"], s["steps"], s["dt"], files, preview, s.get("subcycles", 1)
 
 
 def opening_times(out):
     m = json.load(open(os.path.join(out, "measures.json")))
     thr = m["open_threshold"]
-    g0 = np.array(m["frames"][0]["gap"])
+    g = np.array([f["gap"] for f in m["frames"]])
+    times = np.array([f["time"] for f in m["frames"]])
+    d = g - g[0] - thr
     t = []
-    for c in range(len(g0)):
-        ts = [f["time"] for f in m["frames"] if f["gap"][c] - g0[c] > thr]
-        t.append(ts[0] if ts else None)
+    for c in range(g.shape[1]):
+        i = int(np.argmax(d[:, c] > 0))
+        if d[i, c] <= 0:
+            t.append(None)
+        elif i == 0:
+            t.append(float(times[0]))
+        else:
+            a, b = d[i - 1, c], d[i, c]
+            t.append(float(times[i - 1] + (times[i] - times[i - 1]) * (-a) / (b - a)))
     return t
 
 
@@ -81,12 +100,13 @@ def main():
         for name, args in CONFIGS:
             res[name].append(run(name, args, k))
             print(f"round {k}: {name}: {res[name][-1][1]:.2f} s", file=sys.stderr)
-    ref = res["reference"][-1][0]
+    # the reference run: this run's, or (ONLY without it) an earlier one's directory
+    ref = res["reference"][-1][0] if "reference" in res else os.environ["REF_DIR"]
     t_ref, u_ref = opening_times(ref), final_u(ref)
     big = float(np.abs(u_ref).max())
     print(f"paper scene ({SCENE}), {ROUNDS} rounds, 2 threads; medians")
-    print("| configuration | dt (s) | steps | wall (s) | stepping (s) | animation files (s) | preview (s) | zip front max diff (s) | final displacement max diff / largest |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| configuration | dt (s) | substeps | steps | wall (s) | stepping (s) | animation files (s) | preview (s) | zip front max diff (s) | final displacement max diff / largest |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for name, _ in CONFIGS:
         r = res[name]
         out = r[-1][0]
@@ -95,7 +115,7 @@ def main():
                  if (a is not None or b is not None) else 0.0 for a, b in zip(t, t_ref))
         du = float(np.abs(final_u(out) - u_ref).max()) / big
         med = lambda i: statistics.median(x[i] for x in r)
-        print(f"| {name} | {r[-1][4]:.4g} | {r[-1][3]} | {med(1):.2f} | {med(2):.2f} | {med(5):.2f} | {med(6):.2f} | {dz:.3g} | {du:.3g} |")
+        print(f"| {name} | {r[-1][4]:.4g} | {r[-1][7]} | {r[-1][3]} | {med(1):.2f} | {med(2):.2f} | {med(5):.2f} | {med(6):.2f} | {dz:.3g} | {du:.3g} |")
 
 
 if __name__ == "__main__":

@@ -210,3 +210,25 @@ fn the_gpu_path_refuses_a_subcycled_problem() {
         "{e}"
     );
 }
+
+/// A subcycled run continued from its state half way (a checkpoint's contents) gives the same
+/// bits as the run that did not stop (the fast nodes' previous substep is part of the state).
+#[test]
+fn a_subcycled_run_restored_half_way_gives_the_same_bits() {
+    let p = slabs(4e-5, 0.25, 4, 0.05, -3.0);
+    let mut whole = Simulation::<f64>::new(&p).unwrap();
+    let half = whole.num_steps() / 2;
+    let mut state = None;
+    while !whole.is_finished() {
+        if whole.step_index() == half {
+            state = Some(whole.checkpoint_state());
+        }
+        whole.step().unwrap();
+    }
+    let mut resumed = Simulation::<f64>::new(&p).unwrap();
+    resumed.restore(&state.unwrap()).unwrap();
+    while !resumed.is_finished() {
+        resumed.step().unwrap();
+    }
+    assert_eq!(resumed.checkpoint_state(), whole.checkpoint_state());
+}
