@@ -1,8 +1,12 @@
-//! Small fixed-size 3x3 algebra on plain arrays, generic over [`Real`].
+//! Small fixed-size 3x3 algebra on plain arrays, generic over [`Real`], and the crate's one
+//! set of 3-vector helpers on `[f64; 3]` ([`add`], [`sub`], [`scale`], [`dot`], [`cross`],
+//! [`norm`], [`dist`], [`unit`], [`normalize`]).
 //!
 //! The hot loops use these instead of a general matrix library so that the same code
 //! compiles to straight-line arithmetic in both precisions. Matrices are row-major
-//! `m[i][j]`.
+//! `m[i][j]`. Each helper's floating-point operations are written out in a fixed order
+//! (component by component, sums left to right), so that results do not depend on which
+//! caller uses them.
 
 use crate::real::Real;
 
@@ -86,11 +90,31 @@ pub fn trace<T: Real>(a: &Mat3<T>) -> T {
     a[0][0] + a[1][1] + a[2][2]
 }
 
+/// `a + b`, component by component.
+#[inline(always)]
+pub fn add(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+/// `a - b`, component by component.
+#[inline(always)]
+pub fn sub(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+/// `s a`: each component times `s`.
+#[inline(always)]
+pub fn scale(a: &[f64; 3], s: f64) -> [f64; 3] {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+
+/// `a . b`, summed left to right: `(a0 b0 + a1 b1) + a2 b2`.
 #[inline(always)]
 pub fn dot<T: Real>(a: &Vec3<T>, b: &Vec3<T>) -> T {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// `a x b` (right-handed).
 #[inline(always)]
 pub fn cross(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
     [
@@ -100,9 +124,36 @@ pub fn cross(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
     ]
 }
 
+/// `|a|`: the square root of [`dot`]`(a, a)` (same operations in the same order).
 #[inline(always)]
 pub fn norm(a: &[f64; 3]) -> f64 {
     (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+}
+
+/// `|a - b|`: [`norm`] of [`sub`].
+#[inline(always)]
+pub fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    norm(&sub(a, b))
+}
+
+/// `a / |a|`, each component divided by the norm (no guard: a zero vector gives NaN).
+/// Not bit-equal to [`normalize`], which multiplies by the reciprocal.
+#[inline(always)]
+pub fn unit(a: &[f64; 3]) -> [f64; 3] {
+    let n = norm(a);
+    [a[0] / n, a[1] / n, a[2] / n]
+}
+
+/// `a * (1 / |a|)` ([`scale`] by the reciprocal of the norm), or zero for a zero (or
+/// non-finite) vector. Not bit-equal to [`unit`], which divides.
+#[inline(always)]
+pub fn normalize(a: &[f64; 3]) -> [f64; 3] {
+    let n = norm(a);
+    if n > 0.0 && n.is_finite() {
+        scale(a, 1.0 / n)
+    } else {
+        [0.0; 3]
+    }
 }
 
 /// `det(I + H) - 1` without forming `I + H`, so that small strains keep their

@@ -48,7 +48,7 @@ pub use surface::{
 pub use text::{text_size, FONT_BYTES};
 
 use crate::error::{Error, Location, Result};
-use raster::{norm, sub};
+use crate::linalg::{norm, sub};
 use std::path::Path;
 
 /// Normals of faces meeting at less than this angle are averaged for smooth shading;
@@ -118,7 +118,7 @@ fn quad_triangles(
         let (colour, corners, textured) = style(f);
         let uv = if textured { uv } else { None };
         // Corner triples and edge masks (bit i: edge from corner i to corner i+1).
-        let split: [([usize; 3], u8); 2] = if norm(sub(p(2), p(0))) <= norm(sub(p(3), p(1))) {
+        let split: [([usize; 3], u8); 2] = if norm(&sub(&p(2), &p(0))) <= norm(&sub(&p(3), &p(1))) {
             [([0, 1, 2], 0b011), ([0, 2, 3], 0b110)]
         } else {
             [([0, 1, 3], 0b101), ([1, 2, 3], 0b011)]

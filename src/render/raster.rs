@@ -9,6 +9,7 @@
 //! Rendering is deterministic: triangles are drawn in the given order and a later triangle
 //! only replaces a pixel when it is strictly nearer.
 
+use crate::linalg::{add, cross, dot, norm, normalize, scale, sub};
 use rayon::prelude::*;
 
 /// An 8-bit RGB image, rows top to bottom, `rgb.len() == 3 * width * height`.
@@ -203,41 +204,6 @@ impl Image {
 }
 
 // ---------------------------------------------------------------------------------------
-// Small vector helpers.
-
-pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-pub(crate) fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-pub(crate) fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-pub(crate) fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
-/// `a / |a|`, or zero for a zero (or non-finite) vector.
-pub(crate) fn normalize(a: [f64; 3]) -> [f64; 3] {
-    let n = norm(a);
-    if n > 0.0 && n.is_finite() {
-        scale(a, 1.0 / n)
-    } else {
-        [0.0; 3]
-    }
-}
-
-// ---------------------------------------------------------------------------------------
 // Camera.
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -298,7 +264,7 @@ impl Camera {
     /// The orthonormal camera frame. If `up` is parallel to the view direction another
     /// up vector is chosen.
     pub fn frame(&self) -> CameraFrame {
-        frame_from(sub(self.target, self.eye), self.up)
+        frame_from(sub(&self.target, &self.eye), self.up)
     }
 
     fn tan_half(&self) -> f64 {
@@ -308,8 +274,8 @@ impl Camera {
     /// View coordinates of `p`: `(x right, y up, depth along the view direction)`.
     pub fn to_view(&self, p: [f64; 3]) -> [f64; 3] {
         let f = self.frame();
-        let d = sub(p, self.eye);
-        [dot(d, f.right), dot(d, f.up), dot(d, f.forward)]
+        let d = sub(&p, &self.eye);
+        [dot(&d, &f.right), dot(&d, &f.up), dot(&d, &f.forward)]
     }
 
     /// Pixel coordinates `(x, y)` and depth of `p` in a `width x height` image, or `None`
@@ -331,7 +297,7 @@ impl Camera {
                 (v[0] / (v[2] * t * aspect), v[1] / (v[2] * t))
             }
             Projection::Orthographic => {
-                let half = norm(sub(self.target, self.eye)) * t;
+                let half = norm(&sub(&self.target, &self.eye)) * t;
                 (v[0] / (half * aspect), v[1] / half)
             }
         };
@@ -369,14 +335,14 @@ impl Camera {
             lo = [-1.0; 3];
             hi = [1.0; 3];
         }
-        let centre = scale(add(lo, hi), 0.5);
-        let size = norm(sub(hi, lo)).max(1e-12);
+        let centre = scale(&add(&lo, &hi), 0.5);
+        let size = norm(&sub(&hi, &lo)).max(1e-12);
         // Coordinates relative to the box centre in the camera frame.
         let rel: Vec<[f64; 3]> = finite
             .iter()
             .map(|p| {
-                let d = sub(*p, centre);
-                [dot(d, fr.right), dot(d, fr.up), dot(d, fr.forward)]
+                let d = sub(p, &centre);
+                [dot(&d, &fr.right), dot(&d, &fr.up), dot(&d, &fr.forward)]
             })
             .collect();
         let rel = if rel.is_empty() { vec![[0.0; 3]] } else { rel };
@@ -409,13 +375,13 @@ impl Camera {
                 // The visible height is tied to |target - eye|; keep the eye in front of
                 // the scene anyway (nothing is clipped in orthographic views).
                 let target = add(
-                    centre,
-                    add(
-                        scale(fr.right, 0.5 * (x0 + x1)),
-                        scale(fr.up, 0.5 * (y0 + y1)),
+                    &centre,
+                    &add(
+                        &scale(&fr.right, 0.5 * (x0 + x1)),
+                        &scale(&fr.up, 0.5 * (y0 + y1)),
                     ),
                 );
-                let eye = sub(target, scale(fr.forward, half / ty));
+                let eye = sub(&target, &scale(&fr.forward, half / ty));
                 Camera {
                     eye,
                     target,
@@ -459,8 +425,8 @@ impl Camera {
                     b += 0.5 * (y0 + y1) * d;
                 }
                 let dist = distance(a, b);
-                let target = add(centre, add(scale(fr.right, a), scale(fr.up, b)));
-                let eye = sub(target, scale(fr.forward, dist));
+                let target = add(&centre, &add(&scale(&fr.right, a), &scale(&fr.up, b)));
+                let eye = sub(&target, &scale(&fr.forward, dist));
                 Camera {
                     eye,
                     target,
@@ -474,21 +440,21 @@ impl Camera {
 }
 
 fn frame_from(view_direction: [f64; 3], up: [f64; 3]) -> CameraFrame {
-    let mut forward = normalize(view_direction);
+    let mut forward = normalize(&view_direction);
     if forward == [0.0; 3] {
         forward = [0.0, 0.0, -1.0];
     }
-    let mut right = normalize(cross(forward, up));
-    if norm(right) < 0.5 {
+    let mut right = normalize(&cross(&forward, &up));
+    if norm(&right) < 0.5 {
         // `up` parallel to the view direction: take any perpendicular.
         let alt = if forward[0].abs() < 0.9 {
             [1.0, 0.0, 0.0]
         } else {
             [0.0, 1.0, 0.0]
         };
-        right = normalize(cross(forward, alt));
+        right = normalize(&cross(&forward, &alt));
     }
-    let up = cross(right, forward);
+    let up = cross(&right, &forward);
     CameraFrame { right, up, forward }
 }
 
@@ -625,7 +591,7 @@ struct ClipVertex {
 
 impl ClipVertex {
     fn lerp(&self, o: &ClipVertex, t: f64) -> ClipVertex {
-        let l3 = |a: [f64; 3], b: [f64; 3]| add(a, scale(sub(b, a), t));
+        let l3 = |a: [f64; 3], b: [f64; 3]| add(&a, &scale(&sub(&b, &a), t));
         ClipVertex {
             view: l3(self.view, o.view),
             normal: l3(self.normal, o.normal),
@@ -667,7 +633,7 @@ struct ScreenTriangle {
 fn lambert(n: [f64; 3], lights: &[([f64; 3], f64)], ambient: f64) -> f64 {
     let mut s = ambient;
     for (l, i) in lights {
-        s += i * dot(n, *l).max(0.0);
+        s += i * dot(&n, l).max(0.0);
     }
     s
 }
@@ -694,19 +660,19 @@ pub fn rasterize(
     let lights: Vec<([f64; 3], f64)> = options
         .lights
         .iter()
-        .map(|l| (normalize(l.direction), l.intensity))
+        .map(|l| (normalize(&l.direction), l.intensity))
         .filter(|(d, _)| *d != [0.0; 3])
         .collect();
     let to_cam = |n: [f64; 3]| {
         // Camera coordinates with z towards the viewer.
         [
-            dot(n, frame.right),
-            dot(n, frame.up),
-            -dot(n, frame.forward),
+            dot(&n, &frame.right),
+            dot(&n, &frame.up),
+            -dot(&n, &frame.forward),
         ]
     };
     let perspective = camera.projection == Projection::Perspective;
-    let near = 1e-4 * norm(sub(camera.target, camera.eye)).max(1e-12);
+    let near = 1e-4 * norm(&sub(&camera.target, &camera.eye)).max(1e-12);
     let ssf = ss as f64;
 
     // --- Vertex stage: transform, light, clip, project.
@@ -718,29 +684,29 @@ pub fn rasterize(
             if !p.iter().flatten().all(|c| c.is_finite()) {
                 return out;
             }
-            let face_n = normalize(cross(sub(p[1], p[0]), sub(p[2], p[0])));
+            let face_n = normalize(&cross(&sub(&p[1], &p[0]), &sub(&p[2], &p[0])));
             if face_n == [0.0; 3] {
                 return out; // degenerate
             }
-            let centroid = scale(add(add(p[0], p[1]), p[2]), 1.0 / 3.0);
+            let centroid = scale(&add(&add(&p[0], &p[1]), &p[2]), 1.0 / 3.0);
             let to_viewer = if perspective {
-                sub(camera.eye, centroid)
+                sub(&camera.eye, &centroid)
             } else {
-                scale(frame.forward, -1.0)
+                scale(&frame.forward, -1.0)
             };
-            let flip = if dot(face_n, to_viewer) < 0.0 {
+            let flip = if dot(&face_n, &to_viewer) < 0.0 {
                 -1.0
             } else {
                 1.0
             };
-            let face_cam = to_cam(scale(face_n, flip));
+            let face_cam = to_cam(scale(&face_n, flip));
             let flat_light = lambert(face_cam, &lights, options.ambient);
             let verts: [ClipVertex; 3] = std::array::from_fn(|i| {
-                let vn = normalize(t.normals[i]);
+                let vn = normalize(&t.normals[i]);
                 let n = if vn == [0.0; 3] {
                     face_cam
                 } else {
-                    to_cam(scale(vn, flip))
+                    to_cam(scale(&vn, flip))
                 };
                 let light = match options.shading {
                     Shading::Flat => flat_light,
@@ -986,9 +952,9 @@ fn shade_sample(
         Shading::Flat => t.flat_light,
         Shading::Gouraud => q0 * a.attr.light + q1 * b.attr.light + q2 * c.attr.light,
         Shading::Smooth => {
-            let n = normalize(add(
-                add(scale(a.attr.normal, q0), scale(b.attr.normal, q1)),
-                scale(c.attr.normal, q2),
+            let n = normalize(&add(
+                &add(&scale(&a.attr.normal, q0), &scale(&b.attr.normal, q1)),
+                &scale(&c.attr.normal, q2),
             ));
             lambert(n, lights, options.ambient)
         }

@@ -1,8 +1,8 @@
 //! The boundary surface of a hexahedral mesh: the quadrilateral faces that belong to
 //! exactly one hexahedron, oriented outward, and normals for smooth shading.
 
-use super::raster::{add, cross, dot, normalize, scale, sub};
 use crate::element::hex8::FACES as HEX_FACES;
+use crate::linalg::{add, cross, dot, normalize, scale, sub};
 use std::collections::HashMap;
 
 /// A boundary quadrilateral: its nodes counter-clockwise seen from outside the mesh, the
@@ -67,21 +67,21 @@ pub fn boundary_quads_where(
 /// its direction is the right-hand normal of the node order.
 pub fn quad_vector_area(positions: &[[f64; 3]], nodes: [u32; 4]) -> [f64; 3] {
     let p = |i: usize| positions[nodes[i] as usize];
-    scale(cross(sub(p(2), p(0)), sub(p(3), p(1))), 0.5)
+    scale(&cross(&sub(&p(2), &p(0)), &sub(&p(3), &p(1))), 0.5)
 }
 
 /// Unit normal of a face (zero for a degenerate face).
 pub fn face_normal(positions: &[[f64; 3]], face: &BoundaryFace) -> [f64; 3] {
-    normalize(quad_vector_area(positions, face.nodes))
+    normalize(&quad_vector_area(positions, face.nodes))
 }
 
 /// The centroid of a face's four nodes.
 pub fn face_centroid(positions: &[[f64; 3]], face: &BoundaryFace) -> [f64; 3] {
     let mut c = [0.0; 3];
     for &n in &face.nodes {
-        c = add(c, positions[n as usize]);
+        c = add(&c, &positions[n as usize]);
     }
-    scale(c, 0.25)
+    scale(&c, 0.25)
 }
 
 /// Area-weighted unit vertex normals of the surface at the current `positions`
@@ -91,10 +91,10 @@ pub fn vertex_normals(positions: &[[f64; 3]], faces: &[BoundaryFace]) -> Vec<[f6
     for f in faces {
         let a = quad_vector_area(positions, f.nodes);
         for &v in &f.nodes {
-            n[v as usize] = add(n[v as usize], a);
+            n[v as usize] = add(&n[v as usize], &a);
         }
     }
-    n.into_iter().map(normalize).collect()
+    n.iter().map(normalize).collect()
 }
 
 /// Per-corner normals that keep creases sharp: the normal at corner `i` of a face is the
@@ -145,7 +145,7 @@ pub fn corner_normals_weighted(
         .iter()
         .map(|f| quad_vector_area(positions, f.nodes))
         .collect();
-    let units: Vec<[f64; 3]> = areas.iter().map(|a| normalize(*a)).collect();
+    let units: Vec<[f64; 3]> = areas.iter().map(normalize).collect();
     // Faces around each node (CSR).
     let mut start = vec![0usize; positions.len() + 1];
     for f in faces {
@@ -176,15 +176,15 @@ pub fn corner_normals_weighted(
                     let w = if g == fi {
                         1.0
                     } else {
-                        weight(fi, g, dot(units[g], units[fi]))
+                        weight(fi, g, dot(&units[g], &units[fi]))
                     };
                     if w == 1.0 {
-                        s = add(s, areas[g]);
+                        s = add(&s, &areas[g]);
                     } else if w > 0.0 {
-                        s = add(s, scale(areas[g], w));
+                        s = add(&s, &scale(&areas[g], w));
                     }
                 }
-                let n = normalize(s);
+                let n = normalize(&s);
                 if n == [0.0; 3] {
                     units[fi]
                 } else {

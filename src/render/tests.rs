@@ -1,6 +1,6 @@
 use super::plot::{heatmap_plot, line_plot, profile_plot, PlotSpec, ProfileSpec, Series};
-use super::raster::{dot, sub};
 use super::*;
+use crate::linalg::{dot, sub};
 use crate::mesh::generate::block;
 
 const BG: [u8; 3] = [255, 255, 255];
@@ -195,7 +195,7 @@ fn boundary_of_2x2x2_block_has_24_outward_faces() {
     for f in &faces {
         let n = face_normal(&m.nodes, f);
         let c = face_centroid(&m.nodes, f);
-        assert!(dot(n, sub(c, centre)) > 0.0, "{f:?} points inwards");
+        assert!(dot(&n, &sub(&c, &centre)) > 0.0, "{f:?} points inwards");
         // Axis aligned, on the box surface.
         let axis = (0..3)
             .find(|&k| n[k].abs() > 0.999)
@@ -233,14 +233,14 @@ fn normals_of_a_cube_keep_creases() {
     for (f, cn) in faces.iter().zip(&corner) {
         let n = face_normal(&nodes, f);
         for c in cn {
-            assert!(dot(*c, n) > 1.0 - 1e-12);
+            assert!(dot(c, &n) > 1.0 - 1e-12);
         }
     }
     // Fully smooth: corner normals along the diagonals.
     let vn = vertex_normals(&nodes, &faces);
     let s = 1.0 / 3f64.sqrt();
-    assert!((dot(vn[0], [-s, -s, -s]) - 1.0).abs() < 1e-12);
-    assert!((dot(vn[7], [s, s, s]) - 1.0).abs() < 1e-12);
+    assert!((dot(&vn[0], &[-s, -s, -s]) - 1.0).abs() < 1e-12);
+    assert!((dot(&vn[7], &[s, s, s]) - 1.0).abs() < 1e-12);
 }
 
 #[test]
@@ -776,8 +776,8 @@ fn a_soft_crease_is_continuous_in_the_angle_and_a_hard_one_is_the_old_rule() {
     let hard = corner_normals(&m.nodes, &faces, 60.0);
     let f = faces.iter().position(|f| f.local_face == 2).unwrap();
     let n = face_normal(&m.nodes, &faces[f]);
-    assert!(hard[f].iter().all(|c| dot(*c, n) > 1.0 - 1e-12));
-    assert!(soft[f].iter().any(|c| dot(*c, n) < 0.99));
+    assert!(hard[f].iter().all(|c| dot(c, &n) > 1.0 - 1e-12));
+    assert!(soft[f].iter().any(|c| dot(c, &n) < 0.99));
 }
 
 #[test]
