@@ -8,7 +8,7 @@
 //! Everything here depends only on the reference coordinates `X`, so it runs once,
 //! in `f64`, before time stepping ("total Lagrangian": paper section 3.2).
 
-use crate::linalg::{adjugate, det};
+use crate::linalg::{adjugate, cross, det, norm, sub};
 
 /// Natural coordinates of the 8 corners.
 pub const NATURAL: [[f64; 3]; 8] = [
@@ -220,12 +220,8 @@ pub fn characteristic_length(x: &[[f64; 3]; 8]) -> f64 {
         let p = |k: usize| x[f[k]];
         let d1 = sub(&p(2), &p(0));
         let d2 = sub(&p(3), &p(1));
-        let c = crate::linalg::cross(&d1, &d2);
-        amax = amax.max(0.5 * crate::linalg::norm(&c));
+        let c = cross(&d1, &d2);
+        amax = amax.max(0.5 * norm(&c));
     }
     volume(x) / amax
-}
-
-fn sub(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }

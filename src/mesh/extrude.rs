@@ -35,6 +35,7 @@
 use super::Mesh;
 use crate::element::hex8;
 use crate::error::{Error, Location, Result};
+use crate::linalg::{cross, dot, norm, sub};
 use crate::mesh::surface::QuadSurface;
 use rayon::prelude::*;
 
@@ -45,26 +46,6 @@ pub enum Direction {
     Normal,
     /// Along this direction (normalised here): the direction *into* the body.
     Fixed([f64; 3]),
-}
-
-fn sub(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn norm(a: &[f64; 3]) -> f64 {
-    dot(a, a).sqrt()
 }
 
 /// Area vector of a (possibly warped) quad: half the cross product of its diagonals.

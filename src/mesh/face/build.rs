@@ -49,6 +49,7 @@
 
 use super::prepare::{FaceSource, MuscleLandmarks};
 use crate::error::{Error, Location, Result};
+use crate::linalg::{cross, dot, sub, unit};
 use crate::measures::LipColumns;
 use crate::mesh::extrude::{extrude_with, Direction};
 use crate::mesh::surface::QuadSurface;
@@ -376,23 +377,6 @@ impl FaceModel {
     }
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn unit(a: [f64; 3]) -> [f64; 3] {
-    let n = crate::linalg::norm(&a);
-    [a[0] / n, a[1] / n, a[2] / n]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
 /// Row grading: `xi` in [0, 1] to [0, 1], first step 0.6 of the mean, last 1.4.
 fn grade(xi: f64) -> f64 {
     const A: f64 = 0.6;
@@ -419,8 +403,8 @@ impl<'a> Skin<'a> {
         for q in &s.quads {
             for k in 0..4 {
                 let d = sub(
-                    s.vertices[q[(k + 1) % 4] as usize],
-                    s.vertices[q[k] as usize],
+                    &s.vertices[q[(k + 1) % 4] as usize],
+                    &s.vertices[q[k] as usize],
                 );
                 edge = edge.max(d[0].hypot(d[1]));
             }
@@ -465,7 +449,7 @@ impl<'a> Skin<'a> {
             }
             let z = l1 * a[2] + l2 * b[2] + l3 * c[2];
             if best.as_ref().is_none_or(|(s, _)| z > s.x[2]) {
-                let n = unit(cross(sub(b, a), sub(c, a)));
+                let n = unit(&cross(&sub(&b, &a), &sub(&c, &a)));
                 best = Some((
                     Sample {
                         x: [x, y, z],
@@ -933,12 +917,12 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
     for i in (ns..ns + nm).filter(|&i| is_saliva(i)) {
         let q = (rb * nc + i) as u32;
         let x = |v: u32| surface.vertices[v as usize];
-        let along = sub(x(id(i + 1, rb)), x(id(i, rb)));
-        let along2 = sub(x(id(i + 1, rb + 1)), x(id(i, rb + 1)));
-        let a = unit([0, 1, 2].map(|k| along[k] + along2[k]));
-        let mut nrm = unit(cross(a, back));
-        let rung = sub(x(id(i, rb + 1)), x(id(i, rb)));
-        if crate::linalg::dot(&nrm, &rung) < 0.0 {
+        let along = sub(&x(id(i + 1, rb)), &x(id(i, rb)));
+        let along2 = sub(&x(id(i + 1, rb + 1)), &x(id(i, rb + 1)));
+        let a = unit(&[0, 1, 2].map(|k| along[k] + along2[k]));
+        let mut nrm = unit(&cross(&a, &back));
+        let rung = sub(&x(id(i, rb + 1)), &x(id(i, rb)));
+        if dot(&nrm, &rung) < 0.0 {
             nrm = nrm.map(|v| -v);
         }
         across.insert(q, nrm);
@@ -1201,7 +1185,7 @@ mod tests {
             );
             // the element's extent along the axis is the saliva row's height: thin
             let x = m.mesh.element_coords(e as usize);
-            let along: Vec<f64> = x.iter().map(|p| crate::linalg::dot(p, &a)).collect();
+            let along: Vec<f64> = x.iter().map(|p| dot(p, &a)).collect();
             let thick = along.iter().copied().fold(f64::NEG_INFINITY, f64::max)
                 - along.iter().copied().fold(f64::INFINITY, f64::min);
             assert!(thick < 0.003, "saliva element {e}: {thick} m across");
@@ -1219,7 +1203,7 @@ mod tests {
             .map(|&e| {
                 let a = m.saliva_across[&e];
                 let x = m.mesh.element_coords(e as usize);
-                let along: Vec<f64> = x.iter().map(|p| crate::linalg::dot(p, &a)).collect();
+                let along: Vec<f64> = x.iter().map(|p| dot(p, &a)).collect();
                 along.iter().copied().fold(f64::NEG_INFINITY, f64::max)
                     - along.iter().copied().fold(f64::INFINITY, f64::min)
             })

@@ -40,6 +40,7 @@
 use super::prepare::{Contour, PrepareParams, PINCH_HOPS};
 use super::topology::Adjacency;
 use crate::error::{Error, Location, Result};
+use crate::linalg::{dist, dot};
 use crate::mesh::surface::QuadSurface;
 use std::cmp::Reverse;
 use std::collections::{BTreeMap, BinaryHeap};
@@ -51,10 +52,6 @@ pub const TURN_SCALE: f64 = 0.2;
 /// Cost factor of an edge to a vertex more than [`PINCH_HOPS`] edges from the lips'
 /// candidates.
 pub const OFF_LIPS: f64 = 100.0;
-
-fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-}
 
 /// Every vertex's gap and partner (module docs; `None` where no vertex more than
 /// [`PINCH_HOPS`] edges away lies within `radius`). Ties go to the smaller vertex index.
@@ -110,7 +107,7 @@ pub fn partners(s: &QuadSurface, adj: &Adjacency, radius: f64) -> Vec<Option<(f6
                         if mark[w as usize] == v {
                             continue;
                         }
-                        let d = dist(p, s.vertices[w as usize]);
+                        let d = dist(&p, &s.vertices[w as usize]);
                         if d <= radius && best.is_none_or(|(bd, bw)| d < bd || (d == bd && w < bw))
                         {
                             best = Some((d, w));
@@ -273,7 +270,7 @@ fn nearest_path(s: &QuadSurface, adj: &Adjacency, from: &[u32], to: &[u32]) -> O
             return Some(path);
         }
         for w in adj.neighbours(s, v) {
-            let nd = dv + dist(s.vertices[v as usize], s.vertices[w as usize]);
+            let nd = dv + dist(&s.vertices[v as usize], &s.vertices[w as usize]);
             if nd < d[w as usize] {
                 d[w as usize] = nd;
                 prev[w as usize] = v;
@@ -305,7 +302,6 @@ pub fn find_mouth(
     params: &PrepareParams,
 ) -> Option<Mouth> {
     let p = |v: u32| s.vertices[v as usize];
-    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     let nv = s.vertices.len();
     let mut upper = vec![false; nv];
     let mut lower = vec![false; nv];
@@ -313,7 +309,7 @@ pub fn find_mouth(
         if let Some((_, w)) = pairs[v] {
             let (a, b) = (p(v as u32), p(w));
             let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-            let (dx, dy) = (dot(d, left), dot(d, up));
+            let (dx, dy) = (dot(&d, &left), dot(&d, &up));
             if dy.abs() >= dx.abs() {
                 if dy < 0.0 {
                     upper[v] = true;
@@ -328,7 +324,7 @@ pub fn find_mouth(
         let (lo, hi) = vs
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
-                let x = dot(p(v), left);
+                let x = dot(&p(v), &left);
                 (lo.min(x), hi.max(x))
             });
         hi - lo
@@ -464,7 +460,7 @@ pub fn find_contour_general(
             if p(b)[0] <= p(a)[0] || taken.contains(&b) {
                 return None;
             }
-            let l = dist(p(a), p(b));
+            let l = dist(&p(a), &p(b));
             Some(if near[b as usize] {
                 l * (1.0 + turn(b, down) / TURN_SCALE)
             } else {
@@ -823,7 +819,7 @@ pub fn contour_from_lists(
             .collect();
         let mut line = vec![cr];
         for w in stops.windows(2) {
-            let cost = |a: u32, b: u32| (p(b)[0] > p(a)[0]).then(|| dist(p(a), p(b)));
+            let cost = |a: u32, b: u32| (p(b)[0] > p(a)[0]).then(|| dist(&p(a), &p(b)));
             let Some(path) = cheapest_path(s, adj, w[0], w[1], &cost) else {
                 return refuse(
                     field,

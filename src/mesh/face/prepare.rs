@@ -48,6 +48,7 @@
 use super::lips::find_contour_general;
 use super::topology::{self, edge, Adjacency, Edge};
 use crate::error::{Error, Location, Result};
+use crate::linalg::{cross, dist, dot, norm, sub, unit};
 use crate::mesh::surface::{PolySurface, QuadSurface};
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -428,27 +429,6 @@ pub fn muscle_anchors() -> [(&'static str, [f64; 2], [f64; 2]); 4] {
     crate::mesh::mouth::muscle_anchors()
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
-    crate::linalg::norm(&sub(a, b))
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn unit(a: [f64; 3]) -> [f64; 3] {
-    let n = crate::linalg::norm(&a);
-    [a[0] / n, a[1] / n, a[2] / n]
-}
-
 /// Axes and unit of the input, and the rotation into the model frame.
 #[derive(Clone, Copy, Debug)]
 pub struct InputFrame {
@@ -461,9 +441,9 @@ pub struct InputFrame {
 impl InputFrame {
     /// Rows: the model's x (up x forward), y (up), z (forward) in input coordinates.
     fn rows(&self) -> [[f64; 3]; 3] {
-        let up = unit(self.up);
-        let fw = unit(self.forward);
-        [unit(cross(up, fw)), up, fw]
+        let up = unit(&self.up);
+        let fw = unit(&self.forward);
+        [unit(&cross(&up, &fw)), up, fw]
     }
     pub fn point(&self, p: [f64; 3]) -> [f64; 3] {
         self.vector(p)
@@ -487,9 +467,9 @@ impl InputFrame {
     }
     fn check(&self, file: &str) -> Result<()> {
         let (u, f) = (self.up, self.forward);
-        let nu = crate::linalg::norm(&u);
-        let nf = crate::linalg::norm(&f);
-        let c = crate::linalg::norm(&cross(u, f));
+        let nu = norm(&u);
+        let nf = norm(&f);
+        let c = norm(&cross(&u, &f));
         if !(self.scale.is_finite() && self.scale > 0.0) {
             return Err(Error::field(
                 file,
@@ -568,16 +548,16 @@ pub(crate) fn opening(s: &QuadSurface, upper: &[u32], lower: &[u32]) -> f64 {
         let mut best = f64::INFINITY;
         for w in line.windows(2) {
             let (a, b) = (p(w[0]), p(w[1]));
-            let ab = sub(b, a);
-            let l2 = crate::linalg::dot(&ab, &ab);
+            let ab = sub(&b, &a);
+            let l2 = dot(&ab, &ab);
             let t = if l2 > 0.0 {
-                (crate::linalg::dot(&sub(q, a), &ab) / l2).clamp(0.0, 1.0)
+                (dot(&sub(&q, &a), &ab) / l2).clamp(0.0, 1.0)
             } else {
                 0.0
             };
             best = best.min(dist(
-                q,
-                [a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]],
+                &q,
+                &[a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]],
             ));
         }
         best
@@ -660,8 +640,8 @@ pub fn find_contour(
                 continue;
             }
             let width = dist(
-                s.vertices[upper[0] as usize],
-                s.vertices[*upper.last().unwrap() as usize],
+                &s.vertices[upper[0] as usize],
+                &s.vertices[*upper.last().unwrap() as usize],
             );
             if width < params.min_mouth_width {
                 continue;
@@ -909,7 +889,7 @@ pub fn prepare(
         .map(|&v| pu(v)[2])
         .fold(f64::NEG_INFINITY, f64::max);
     let centre = [0.5 * (cr[0] + cl[0]), 0.5 * (cr[1] + cl[1]), front];
-    check_upright(&s, centre, dist(cr, cl), frame.up, file)?;
+    check_upright(&s, centre, dist(&cr, &cl), frame.up, file)?;
     let in_box = |c: [f64; 3]| {
         (c[0] - centre[0]).abs() <= params.half_width
             && c[1] >= centre[1] - params.below
@@ -999,8 +979,8 @@ pub fn prepare(
         })
         .collect();
     let width = dist(
-        surf.vertices[upper[0] as usize],
-        surf.vertices[*upper.last().unwrap() as usize],
+        &surf.vertices[upper[0] as usize],
+        &surf.vertices[*upper.last().unwrap() as usize],
     );
     let hinge_point = rig.hinge_point.map(|p| frame.point(p)).unwrap_or_else(|| {
         let h = estimated_hinge(centre, width);
@@ -1034,7 +1014,7 @@ pub fn prepare(
     }
     let hinge_axis = match rig.hinge_axis {
         Some(a) => {
-            let u = unit(frame.vector(a));
+            let u = unit(&frame.vector(a));
             if !u.iter().all(|x| x.is_finite()) {
                 return Err(Error::field(
                     rig_file,
@@ -1973,7 +1953,7 @@ mod tests {
         let f = super::super::makehuman().unwrap();
         let d = &f.data;
         let p = |v: u32| f.surface.vertices[v as usize];
-        let width = dist(p(d.upper_contour[0]), p(*d.upper_contour.last().unwrap()));
+        let width = dist(&p(d.upper_contour[0]), &p(*d.upper_contour.last().unwrap()));
         let h = estimated_hinge(d.mouth_center, width);
         // the constants are rounded to 3 decimals of a mouth width: 0.05 mm here
         for k in 0..3 {
