@@ -5,6 +5,7 @@
 use crate::element::{max_abs8, problem};
 use sticky_lips::blend::blend;
 use sticky_lips::element::hex8::GradientVariant;
+use sticky_lips::linalg::{cross, dot, norm, sub};
 use sticky_lips::mesh::generate::{distorted_block, SplitMix64};
 use sticky_lips::muscle::Muscle;
 use sticky_lips::problem::boundary::{
@@ -17,23 +18,6 @@ use sticky_lips::tled::simd::SimdReal;
 use sticky_lips::tled::solver::{displacement_gradient, Simulation};
 
 type V3 = [f64; 3];
-
-fn sub(a: &V3, b: &V3) -> V3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn dot(a: &V3, b: &V3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: &V3, b: &V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn norm(a: &V3) -> f64 {
-    dot(a, a).sqrt()
-}
 
 // ---------------------------------------------------------------------------------------
 // Muscles
