@@ -1,6 +1,6 @@
 //! Small fixed-size 3x3 algebra on plain arrays, generic over [`Real`], and the crate's one
 //! set of 3-vector helpers on `[f64; 3]` ([`add`], [`sub`], [`scale`], [`dot`], [`cross`],
-//! [`norm`], [`dist`], [`unit`], [`normalize`]).
+//! [`norm`], [`dist`], [`unit`](fn@unit), [`normalize`]).
 //!
 //! The hot loops use these instead of a general matrix library so that the same code
 //! compiles to straight-line arithmetic in both precisions. Matrices are row-major
@@ -145,7 +145,7 @@ pub fn unit(a: &[f64; 3]) -> [f64; 3] {
 }
 
 /// `a * (1 / |a|)` ([`scale`] by the reciprocal of the norm), or zero for a zero (or
-/// non-finite) vector. Not bit-equal to [`unit`], which divides.
+/// non-finite) vector. Not bit-equal to [`unit`](fn@unit), which divides.
 #[inline(always)]
 pub fn normalize(a: &[f64; 3]) -> [f64; 3] {
     let n = norm(a);
