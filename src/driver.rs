@@ -3,6 +3,7 @@
 
 use crate::error::Result;
 use crate::io::checkpoint::{self, RunHistory, SolverState};
+pub use crate::io::output::EnergySeries;
 use crate::io::output::{Frame, FrameWriter, SalivaFrame};
 use crate::problem::Problem;
 use crate::real::{Precision, Real};
@@ -93,13 +94,6 @@ impl RunOptions {
             export: true,
         }
     }
-}
-
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct EnergySeries {
-    pub time: Vec<f64>,
-    pub kinetic: Vec<f64>,
-    pub strain: Vec<f64>,
 }
 
 fn one() -> usize {

@@ -22,8 +22,8 @@
 //! atomically (`io::atomic`), so a run killed at any moment leaves the previous checkpoint
 //! or the new one, never a mixture; the checksum catches a file damaged afterwards.
 
-use crate::driver::EnergySeries;
 use crate::error::{Error, Location, Result};
+use crate::io::output::EnergySeries;
 use crate::io::vtu::PvdEntry;
 use crate::measures::RunMeasures;
 use crate::problem::Problem;

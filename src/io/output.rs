@@ -18,6 +18,20 @@ use std::sync::mpsc::{sync_channel, SyncSender};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 
+/// The energies at each output frame: `summary.json`'s `energy`, and the part of a
+/// checkpoint's history ([`crate::io::checkpoint::RunHistory`]) that a restart continues.
+/// Defined here, below the driver, so that the checkpoint need not import the driver (which
+/// re-exports it as `driver::EnergySeries`).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct EnergySeries {
+    /// Simulated time of each frame (s).
+    pub time: Vec<f64>,
+    /// Kinetic energy (J).
+    pub kinetic: Vec<f64>,
+    /// Strain energy (J).
+    pub strain: Vec<f64>,
+}
+
 /// What one frame holds, in `f64`, computed by the caller from the solver's state.
 #[derive(Clone, Debug)]
 pub struct Frame {
