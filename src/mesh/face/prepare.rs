@@ -45,51 +45,18 @@
 //! The input's length unit and its up and forward axes are given; everything is converted
 //! to metres in the model frame: `x` the subject's left (`up x forward`), `y` up, `z` forward.
 
+use super::contour::opening;
+pub use super::contour::{Contour, PrepareParams, PINCH_HOPS};
 use super::lips::find_contour_general;
 use super::topology::{self, edge, Adjacency, Edge};
 use crate::error::{Error, Location, Result};
-use crate::linalg::{cross, dist, dot, norm, sub, unit};
+use crate::linalg::{cross, dist, norm, unit};
 use crate::mesh::surface::{PolySurface, QuadSurface};
 use std::collections::{BTreeMap, BTreeSet};
-
-/// Edges a vertex must be away along the surface for its distance to count as a pinch.
-pub const PINCH_HOPS: usize = 6;
 
 /// Loops whose opening is within this factor of the smallest are where the lips touch; the
 /// contour is the front-most of them.
 pub const CONTACT_BAND: f64 = 1.25;
-
-/// Parameters of the crop (SI metres).
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct PrepareParams {
-    /// Kept: quads whose centre is within this distance left and right of the mouth centre.
-    pub half_width: f64,
-    /// ... and at most this far below the mouth centre (the chin) ...
-    pub below: f64,
-    /// ... and at most this far above it (below the nose) ...
-    pub above: f64,
-    /// ... and at most this far behind the front of the lips (the back of the head is not
-    /// the face).
-    pub behind: f64,
-    /// Vertices closer than this to a vertex far away along the surface are lip candidates.
-    pub pinch: f64,
-    /// Candidate contours narrower than this (corner to corner) are not the mouth.
-    pub min_mouth_width: f64,
-}
-
-impl Default for PrepareParams {
-    fn default() -> Self {
-        PrepareParams {
-            half_width: 0.050,
-            below: 0.050,
-            above: 0.025,
-            behind: 0.060,
-            pinch: 0.003,
-            min_mouth_width: 0.025,
-        }
-    }
-}
 
 /// A rig's data on the input head's vertices, in the input's units and axes (all optional).
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
@@ -488,17 +455,6 @@ impl InputFrame {
     }
 }
 
-/// The inner lip contour of a surface: the upper and lower halves from the subject's right
-/// corner to the left one (shared corners), the loop's opening (m) and how many candidate
-/// loops were compared.
-#[derive(Clone, Debug)]
-pub struct Contour {
-    pub upper: Vec<u32>,
-    pub lower: Vec<u32>,
-    pub opening: f64,
-    pub candidates: usize,
-}
-
 /// Pinch distance of every vertex (m; infinity where no vertex lies within `radius`): the
 /// gap of [`super::lips::partners`].
 fn pinch_distances(s: &QuadSurface, adj: &Adjacency, radius: f64) -> Vec<f64> {
@@ -539,38 +495,6 @@ fn halves(s: &QuadSurface, ring: &[u32]) -> (Vec<u32>, Vec<u32>) {
     } else {
         (b, a)
     }
-}
-
-/// Mean distance from the vertices of each half to the other half's polyline.
-pub(crate) fn opening(s: &QuadSurface, upper: &[u32], lower: &[u32]) -> f64 {
-    let p = |v: u32| s.vertices[v as usize];
-    let to_polyline = |q: [f64; 3], line: &[u32]| -> f64 {
-        let mut best = f64::INFINITY;
-        for w in line.windows(2) {
-            let (a, b) = (p(w[0]), p(w[1]));
-            let ab = sub(&b, &a);
-            let l2 = dot(&ab, &ab);
-            let t = if l2 > 0.0 {
-                (dot(&sub(&q, &a), &ab) / l2).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            best = best.min(dist(
-                &q,
-                &[a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]],
-            ));
-        }
-        best
-    };
-    let mut sum = 0.0;
-    let mut n = 0usize;
-    for (h, other) in [(upper, lower), (lower, upper)] {
-        for &v in &h[1..h.len() - 1] {
-            sum += to_polyline(p(v), other);
-            n += 1;
-        }
-    }
-    sum / n.max(1) as f64
 }
 
 /// The widest gap between two lip halves seen from the front (module docs): the largest
