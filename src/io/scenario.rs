@@ -60,30 +60,62 @@ pub struct ScenarioFile {
 #[derive(Deserialize, Debug, Default)]
 #[serde(deny_unknown_fields)]
 pub struct Units {
-    /// `"m"` (default), `"cm"` or `"mm"`.
+    /// `"m"` (default), `"dm"`, `"cm"`, `"mm"` or `"in"`.
     pub length: Option<LengthUnit>,
 }
 
-/// The length unit of a scenario file's coordinates, sizes and displacements.
+/// A length unit: of a scenario file's coordinates, sizes and displacements (`[units]
+/// length`), and of a head's OBJ (`face --units`). The one table of units in the project.
 #[derive(Deserialize, Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub enum LengthUnit {
     #[default]
     #[serde(rename = "m")]
     Metre,
+    #[serde(rename = "dm")]
+    Decimetre,
     #[serde(rename = "cm")]
     Centimetre,
     #[serde(rename = "mm")]
     Millimetre,
+    #[serde(rename = "in")]
+    Inch,
 }
 
 impl LengthUnit {
+    /// Every unit, largest first.
+    pub const ALL: [LengthUnit; 5] = [
+        LengthUnit::Metre,
+        LengthUnit::Decimetre,
+        LengthUnit::Centimetre,
+        LengthUnit::Millimetre,
+        LengthUnit::Inch,
+    ];
+
     /// Metres per unit.
     pub fn metres(self) -> f64 {
         match self {
             LengthUnit::Metre => 1.0,
+            LengthUnit::Decimetre => 0.1,
             LengthUnit::Centimetre => 1e-2,
             LengthUnit::Millimetre => 1e-3,
+            LengthUnit::Inch => 0.0254,
         }
+    }
+
+    /// The unit's symbol (`m`, `dm`, `cm`, `mm`, `in`), as files and the command line write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            LengthUnit::Metre => "m",
+            LengthUnit::Decimetre => "dm",
+            LengthUnit::Centimetre => "cm",
+            LengthUnit::Millimetre => "mm",
+            LengthUnit::Inch => "in",
+        }
+    }
+
+    /// The unit of symbol `name`, if any.
+    pub fn from_name(name: &str) -> Option<LengthUnit> {
+        LengthUnit::ALL.into_iter().find(|u| u.name() == name)
     }
 }
 
@@ -1915,5 +1947,30 @@ mod size_tests {
             e.starts_with("big.toml: is ") && e.contains("keys_file"),
             "{e}"
         );
+    }
+}
+
+#[cfg(test)]
+mod unit_tests {
+    use super::LengthUnit;
+
+    /// The one unit table: symbols round-trip, the scale of each, and a scenario's `[units]
+    /// length` reads every symbol the command line takes.
+    #[test]
+    fn length_units_round_trip() {
+        let want = [
+            ("m", 1.0),
+            ("dm", 0.1),
+            ("cm", 0.01),
+            ("mm", 0.001),
+            ("in", 0.0254),
+        ];
+        for (u, (name, metres)) in LengthUnit::ALL.iter().zip(want) {
+            assert_eq!((u.name(), u.metres()), (name, metres));
+            assert_eq!(LengthUnit::from_name(name), Some(*u));
+            let parsed: super::Units = toml::from_str(&format!("length = \"{name}\"")).unwrap();
+            assert_eq!(parsed.length, Some(*u));
+        }
+        assert_eq!(LengthUnit::from_name("km"), None);
     }
 }

@@ -1209,14 +1209,7 @@ struct FaceArgs<'a> {
 
 /// Metres per unit of a length unit's name.
 fn unit_scale(name: &str) -> Option<f64> {
-    match name {
-        "m" => Some(1.0),
-        "dm" => Some(0.1),
-        "cm" => Some(0.01),
-        "mm" => Some(0.001),
-        "in" => Some(0.0254),
-        _ => None,
-    }
+    scenario::LengthUnit::from_name(name).map(scenario::LengthUnit::metres)
 }
 
 /// The unit in which a head's largest extent (of the vertices its faces use) is that of a
@@ -1232,9 +1225,9 @@ fn detect_units(
             .map(|&v| &head.vertices[v as usize]),
     );
     let extent = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
-    let fits: Vec<(&'static str, f64)> = ["m", "dm", "cm", "mm", "in"]
+    let fits: Vec<(&'static str, f64)> = scenario::LengthUnit::ALL
         .iter()
-        .map(|&u| (u, unit_scale(u).expect("a known unit")))
+        .map(|u| (u.name(), u.metres()))
         .filter(|&(_, s)| (0.12..=0.45).contains(&(extent * s)))
         .collect();
     match fits.as_slice() {
