@@ -232,3 +232,30 @@ fn a_subcycled_run_restored_half_way_gives_the_same_bits() {
     }
     assert_eq!(resumed.checkpoint_state(), whole.checkpoint_state());
 }
+
+/// `run`'s check refuses each partition's step above its own limit: the substep above the
+/// whole model's critical step, the large step above the tissue's.
+#[test]
+fn each_step_is_checked_against_its_own_limit() {
+    use sticky_lips::tled::stability::check_time_step;
+    let probe = slabs(1e-5, 1e-5, 1, 1e6, 0.0);
+    let d = sticky_lips::tled::precompute::Discretisation::new(&probe);
+    let report = sticky_lips::tled::stability::analyse(&probe, &d);
+    let (critical, tissue) = critical_steps(&probe);
+    // within both limits
+    assert!(check_time_step(&slabs(2.0 * critical, 0.01, 4, 1e6, 0.0), &report, false).is_ok());
+    // the substep too large
+    let e = check_time_step(&slabs(2.0 * critical, 0.01, 1, 1e6, 0.0), &report, false)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("exceeds the critical time step"), "{e}");
+    // the large step above the tissue's limit, however many substeps
+    let e = check_time_step(&slabs(1.1 * tissue, 0.05, 64, 1e6, 0.0), &report, false)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("64 substeps") && e.contains("critical time step of the tissue"),
+        "{e}"
+    );
+    assert!(check_time_step(&slabs(1.1 * tissue, 0.05, 64, 1e6, 0.0), &report, true).is_ok());
+}

@@ -77,6 +77,12 @@ fn gather_slots<T: Real>(slots: &[u32], corners: &[[T; 3]]) -> [T; 3] {
     f
 }
 
+/// Eq. (3) in increment form for one node: `u_n + A (R - F) + c_1 (u_n - u_{n-1})`.
+#[inline(always)]
+fn advance<T: Real>(un: [T; 3], up: [T; 3], a: T, c1: T, r: [T; 3], f: [T; 3]) -> [T; 3] {
+    [0, 1, 2].map(|k| un[k] + a * (r[k] - f[k]) + c1 * (un[k] - up[k]))
+}
+
 /// Stage `node_update`: `u_next` from `u`, `u_prev`, the element forces and the external
 /// forces `r_ext` (`None` = no external load). Returns the smallest node index with a
 /// non-finite result, if any.
@@ -111,11 +117,7 @@ pub fn node_update<T: Real>(
                     Some(r) => r[base + i],
                     None => [T::ZERO; 3],
                 };
-                let (un, up, ai) = (u[i], u_prev[i], a[i]);
-                let mut v = [T::ZERO; 3];
-                for k in 0..3 {
-                    v[k] = un[k] + ai * (r[k] - f[k]) + c1 * (un[k] - up[k]);
-                }
+                let v = advance(u[i], u_prev[i], a[i], c1, r, f);
                 chunk[i] = v;
                 if !(v[0].is_finite() && v[1].is_finite() && v[2].is_finite())
                     && first_bad == usize::MAX
@@ -158,10 +160,7 @@ pub fn node_update_listed<T: Real>(
                 let n = n as usize;
                 let f = gather_slots(gather.of(n), corners);
                 let r = r_ext.map_or([T::ZERO; 3], |r| r[n]);
-                let (un, up, ai) = (u[n], u_prev[n], cd.a[n]);
-                for k in 0..3 {
-                    v[k] = un[k] + ai * (r[k] - f[k]) + c1 * (un[k] - up[k]);
-                }
+                *v = advance(u[n], u_prev[n], cd.a[n], c1, r, f);
                 if !(v[0].is_finite() && v[1].is_finite() && v[2].is_finite()) {
                     first_bad = first_bad.min(n);
                 }

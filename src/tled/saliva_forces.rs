@@ -49,6 +49,16 @@ impl<T: Real> SalivaState<T> {
         }
     }
 
+    /// Copies `other`'s state into `self` (same plan) without allocating.
+    pub fn copy_from(&mut self, other: &Self) {
+        self.previous.copy_from_slice(&other.previous);
+        self.broken.copy_from_slice(&other.broken);
+        self.broken_at.copy_from_slice(&other.broken_at);
+        self.moisture.copy_from_slice(&other.moisture);
+        self.z.copy_from_slice(&other.z);
+        self.q.copy_from_slice(&other.q);
+    }
+
     pub fn broken_count(&self) -> usize {
         self.broken.iter().filter(|b| **b).count()
     }

@@ -102,7 +102,7 @@ impl<T: SimdReal> Simulation<T> {
             ))
         });
         let saliva = match &sub {
-            Some(s) => SalivaState::new(&s.fast_saliva),
+            Some(s) => s.saliva_start.clone(),
             None => SalivaState::new(&disc.saliva),
         };
         Ok(Simulation {
@@ -370,7 +370,7 @@ impl<T: SimdReal> Simulation<T> {
             sub.fast_u_start[i] = self.u[n as usize];
             sub.fast_u_prev_start[i] = self.u_prev[n as usize];
         }
-        let saliva_start = self.saliva.clone();
+        sub.saliva_start.copy_from(&self.saliva);
         // 2. the fast nodes in k substeps, the interface interpolated linearly in time
         let mut failure = None;
         for j in 0..k {
@@ -432,7 +432,7 @@ impl<T: SimdReal> Simulation<T> {
                 self.u[n as usize] = sub.fast_u_start[i];
                 self.u_prev[n as usize] = sub.fast_u_prev_start[i];
             }
-            self.saliva = saliva_start;
+            self.saliva.copy_from(&sub.saliva_start);
             return Err(e);
         }
         // 3. the slow nodes to t_n + dt
@@ -448,15 +448,7 @@ impl<T: SimdReal> Simulation<T> {
     /// External forces at time `t` (s), curves clamped (not under NiftySim's timing: a
     /// subcycled run refuses it).
     fn assemble_external_at(&mut self, t: f64) {
-        for r in self.r_ext.iter_mut() {
-            *r = [T::ZERO; 3];
-        }
-        for g in &self.disc.loads {
-            let c = g.curve.value(t, true);
-            for &(dof, v) in &g.entries {
-                self.r_ext[dof as usize / 3][dof as usize % 3] += T::from_f64(v * c);
-            }
-        }
+        self.fill_external(|curve| curve.value(t, true));
     }
 
     fn constraint_time(&self, s: usize) -> (f64, bool) {
@@ -464,11 +456,17 @@ impl<T: SimdReal> Simulation<T> {
     }
 
     fn assemble_external(&mut self, s: usize) {
+        let (dt, nifty) = (self.dt, self.niftysim_timing);
+        self.fill_external(|curve| load_value(curve, s, dt, nifty));
+    }
+
+    /// `R = sum_g value(curve_g) r_g` into `r_ext`.
+    fn fill_external(&mut self, value: impl Fn(&LoadCurve) -> f64) {
         for r in self.r_ext.iter_mut() {
             *r = [T::ZERO; 3];
         }
         for g in &self.disc.loads {
-            let c = load_value(&g.curve, s, self.dt, self.niftysim_timing);
+            let c = value(&g.curve);
             for &(dof, v) in &g.entries {
                 self.r_ext[dof as usize / 3][dof as usize % 3] += T::from_f64(v * c);
             }

@@ -35,6 +35,7 @@ use crate::real::Real;
 use crate::tled::element_forces::ElementArrays;
 use crate::tled::node_update::CentralDifference;
 use crate::tled::precompute::{ConstraintPlan, Discretisation, SalivaPlan};
+use crate::tled::saliva_forces::SalivaState;
 
 /// The most substeps per step a run may ask for.
 pub const MAX_SUBCYCLES: usize = 64;
@@ -72,6 +73,9 @@ pub struct Subcycling<T> {
     pub interface_start: Vec<[T; 3]>,
     pub fast_u_start: Vec<[T; 3]>,
     pub fast_u_prev_start: Vec<[T; 3]>,
+    /// The saliva state at the step's start (restored on divergence); built from the fast
+    /// plan, it is also the run's initial state (eq. 11's decay per substep).
+    pub saliva_start: SalivaState<T>,
 }
 
 /// Elements (global indices, increasing) with at least one node for which `pick` is true.
@@ -133,6 +137,7 @@ impl<T: Real> Subcycling<T> {
             interface_start: vec![[T::ZERO; 3]; ni],
             fast_u_start: vec![[T::ZERO; 3]; nf],
             fast_u_prev_start: vec![[T::ZERO; 3]; nf],
+            saliva_start: SalivaState::new(&fast_saliva),
             fast_nodes,
             slow_nodes,
             interface,
