@@ -1,6 +1,7 @@
 //! Runs a problem to an output directory: stability check, time stepping, frames,
 //! progress, summary. Used by the CLI (`sticky-lips run`, `equilibrium`) and by tests.
 
+use crate::control::{CancelToken, OnProgress, ProgressUpdate};
 use crate::error::Result;
 use crate::io::checkpoint::{self, RunHistory, SolverState};
 pub use crate::io::output::EnergySeries;
@@ -14,16 +15,6 @@ use crate::tled::stability::{analyse, check_time_step, StabilityReport};
 use crate::tled::Simulation;
 use std::path::PathBuf;
 use std::time::Instant;
-
-/// How a run reports progress.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Progress {
-    /// A progress bar on the terminal (steps per second, ETA).
-    Bar,
-    /// A plain line every 10 % (for logs and pipes).
-    Plain,
-    Quiet,
-}
 
 /// Where the explicit steps run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -69,7 +60,10 @@ pub struct RunOptions {
     pub threads: usize,
     /// Run even if the time step exceeds the critical one.
     pub force_dt: bool,
-    pub progress: Progress,
+    /// Stops the run between two steps (the command line cancels it on SIGINT/SIGTERM).
+    pub cancel: CancelToken,
+    /// Called as the run goes ([`ProgressUpdate`]); `None`: nothing reported.
+    pub progress: Option<OnProgress>,
     /// Write `checkpoint.bin` every this many steps (CPU backend; see `io::checkpoint`).
     pub checkpoint_every: Option<usize>,
     /// Continue the run whose output is in `out` from its `checkpoint.bin`.
@@ -88,7 +82,8 @@ impl RunOptions {
             backend: Backend::Cpu,
             threads,
             force_dt: false,
-            progress: Progress::Quiet,
+            cancel: CancelToken::new(),
+            progress: None,
             checkpoint_every: None,
             restart: false,
             export: true,
@@ -154,37 +149,9 @@ pub struct Interruption {
     pub time: f64,
 }
 
-/// Set (by the command line's SIGINT/SIGTERM handler) to stop runs at the next check, at
-/// most [`INTERRUPT_CHECK_STEPS`] steps later.
-static STOP: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-
-/// Steps between two looks at [`request_stop`]'s flag (the stepping is cut into pieces of
+/// Steps between two looks at the run's [`CancelToken`] (the stepping is cut into pieces of
 /// at most this many steps; results do not depend on it).
 pub const INTERRUPT_CHECK_STEPS: usize = 512;
-
-/// Asks every run of this process to stop between two steps (safe from a signal-handling
-/// thread). A run that stops writes `summary.json` marked interrupted and returns
-/// [`crate::error::Error::Interrupted`].
-pub fn request_stop() {
-    STOP.store(true, std::sync::atomic::Ordering::SeqCst);
-}
-
-/// Whether SIGINT or SIGTERM asked this process to stop ([`request_stop`]).
-pub fn stop_requested() -> bool {
-    STOP.load(std::sync::atomic::Ordering::SeqCst)
-}
-
-/// For the long commands that are not a run's stepping: an error [`Error::Cancelled`]
-/// saying `what` (e.g. "face stopped before writing anything") once a stop was requested.
-///
-/// [`Error::Cancelled`]: crate::error::Error::Cancelled
-pub fn check_stop(what: impl FnOnce() -> String) -> crate::error::Result<()> {
-    if stop_requested() {
-        Err(crate::error::Error::Cancelled(what()))
-    } else {
-        Ok(())
-    }
-}
 
 fn pool(threads: usize) -> rayon::ThreadPool {
     rayon::ThreadPoolBuilder::new()
@@ -418,10 +385,9 @@ fn run_with<S: Stepper>(
         record(&mut sim, &mut writer, &mut history, problem)?;
     }
     let n = sim.num_steps();
-    let bar = progress_bar(opts.progress, n as u64);
+    let start_step = sim.step_index();
     let every = problem.time.output_every;
     let mut stepping = 0.0;
-    let mut next_plain = sim.step_index() + n / 10;
     let mut interrupted = None;
     let write_checkpoint = |sim: &S,
                             writer: &mut FrameWriter,
@@ -451,8 +417,24 @@ fn run_with<S: Stepper>(
         header.history.stepping_time += stepping;
         writer.checkpoint(checkpoint::encode(&header, &state))
     };
+    let report_progress = |sim: &S, frames: usize, stepping: f64| {
+        if let Some(p) = &opts.progress {
+            let done = sim.step_index() - start_step;
+            p.call(&ProgressUpdate {
+                step: sim.step_index(),
+                steps: n,
+                time: sim.time(),
+                end_time: problem.time.total_time,
+                frames,
+                elapsed: stepping,
+                seconds_left: (done > 0)
+                    .then(|| stepping / done as f64 * (n - sim.step_index()) as f64),
+            });
+        }
+    };
+    report_progress(&sim, writer.frames_written(), 0.0);
     while !sim.is_finished() {
-        if stop_requested() {
+        if opts.cancel.is_cancelled() {
             interrupted = Some(Interruption {
                 step: sim.step_index(),
                 time: sim.time(),
@@ -475,15 +457,7 @@ fn run_with<S: Stepper>(
         if chunk == to_checkpoint && !sim.is_finished() {
             write_checkpoint(&sim, &mut writer, &mut history, stepping)?;
         }
-        if let Some(b) = &bar {
-            b.set_position(sim.step_index() as u64);
-        } else if opts.progress == Progress::Plain && sim.step_index() >= next_plain {
-            eprintln!("step {}/{} (t = {:.4e} s)", sim.step_index(), n, sim.time());
-            next_plain += (n / 10).max(1);
-        }
-    }
-    if let Some(b) = bar {
-        b.finish_and_clear();
+        report_progress(&sim, writer.frames_written(), stepping);
     }
     let stepping = history.stepping_time + stepping;
     let steps_here = sim.step_index() - restarted_from.unwrap_or(0);
@@ -525,7 +499,7 @@ fn run_with<S: Stepper>(
         // from the frames on disk: every one handed over first
         writer.flush()?;
         if writer.frames_written() > 0 {
-            summary.export = Some(crate::export::export(skin, &opts.out)?);
+            summary.export = Some(crate::export::export_with(skin, &opts.out, &opts.cancel)?);
         }
     }
     if let Some(i) = interrupted {
@@ -606,18 +580,6 @@ pub fn write_measures(dir: &std::path::Path, m: &crate::measures::RunMeasures) -
     )?;
     w("gap.csv", m.gap_csv().as_bytes())?;
     w("series.csv", m.series_csv().as_bytes())
-}
-
-fn progress_bar(p: Progress, n: u64) -> Option<indicatif::ProgressBar> {
-    if p != Progress::Bar {
-        return None;
-    }
-    let b = indicatif::ProgressBar::new(n);
-    b.set_style(
-        indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps  {per_sec}  ETA {eta}")
-            .expect("progress template"),
-    );
-    Some(b)
 }
 
 /// Static equilibrium at the end-of-run loads, written like a run with one frame.

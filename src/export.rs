@@ -119,6 +119,15 @@ pub fn skin_map(skin: &Skin, dir: &Path) -> Result<serde_json::Value> {
 
 /// Writes `skin.obj`, `skin.pc2`, `skin.mdd` and `skin.usda` into `dir` from its frames.
 pub fn export(skin: &Skin, dir: &Path) -> Result<ExportSummary> {
+    export_with(skin, dir, &crate::control::CancelToken::new())
+}
+
+/// [`export`], stopped by `cancel` between two frames (nothing is written then).
+pub fn export_with(
+    skin: &Skin,
+    dir: &Path,
+    cancel: &crate::control::CancelToken,
+) -> Result<ExportSummary> {
     let t0 = std::time::Instant::now();
     let entries = read_pvd(dir)?;
     if entries.is_empty() {
@@ -151,7 +160,7 @@ pub fn export(skin: &Skin, dir: &Path) -> Result<ExportSummary> {
     let times: Vec<f64> = entries.iter().map(|e| e.0).collect();
     let need = skin.max_node().map_or(0, |n| n as usize + 1);
     for (k, (t, file)) in entries.iter().enumerate() {
-        crate::driver::check_stop(|| {
+        cancel.check(|| {
             format!(
                 "export stopped at frame {k} of {}; no animation file written (they are written together at the end)",
                 entries.len()
@@ -288,7 +297,7 @@ pub fn export(skin: &Skin, dir: &Path) -> Result<ExportSummary> {
         ("skin.mdd", mdd_bytes(&frames, &times)),
         ("skin.usda", usda.into_bytes()),
     ];
-    crate::driver::check_stop(|| {
+    cancel.check(|| {
         "export stopped after reading every frame; no animation file written".to_string()
     })?;
     for (name, bytes) in &files {

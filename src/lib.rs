@@ -15,6 +15,7 @@
 
 pub mod blend;
 pub mod claims;
+pub mod control;
 pub mod driver;
 pub mod element;
 pub mod error;

@@ -1,6 +1,6 @@
 //! A sweep's plan (`sticky-lips sweep SPEC.toml`): the spec's text in, every run's name,
 //! overrides, directory, command and scenario text out, all checked, before anything is
-//! written. The command line (`src/bin/sticky-lips/sweep.rs`) writes the plan's files and
+//! written. The command line (`cli/src/sweep.rs`) writes the plan's files and
 //! runs its jobs.
 //!
 //! A spec names a base scenario and what changes: a `[grid]` of override values (every

@@ -643,6 +643,7 @@ pub fn detect_axes(
     scale: f64,
     params: &PrepareParams,
     file: &str,
+    cancel: &crate::control::CancelToken,
 ) -> Result<DetectedAxes> {
     let mut metres = head.clone();
     for v in metres.vertices.iter_mut() {
@@ -666,7 +667,7 @@ pub fn detect_axes(
             if l == u {
                 continue;
             }
-            crate::driver::check_stop(|| {
+            cancel.check(|| {
                 format!("face stopped while detecting the axes of {file}; nothing written")
             })?;
             if let Some(m) = find_mouth(&s, &adj, &pairs, axis(u), axis(l), params) {

@@ -28,8 +28,8 @@ pub mod topology;
 
 pub use build::{build, FaceModel, FaceParams};
 pub use prepare::{
-    check_head_size, prepare, FaceData, FaceRig, FaceSource, HeadMesh, InputFrame, InputUnits,
-    PrepareParams, MAX_HEAD_QUADS, MAX_POLYGON_CORNERS,
+    check_head_size, prepare, prepare_with, FaceData, FaceRig, FaceSource, HeadMesh, InputFrame,
+    InputUnits, PrepareParams, MAX_HEAD_QUADS, MAX_POLYGON_CORNERS,
 };
 
 use crate::error::{Error, Location, Result};

@@ -49,6 +49,7 @@ use super::contour::opening;
 pub use super::contour::{Contour, PrepareParams, PINCH_HOPS};
 use super::lips::find_contour_general;
 use super::topology::{self, edge, Adjacency, Edge};
+use crate::control::CancelToken;
 use crate::error::{Error, Location, Result};
 use crate::linalg::{cross, dist, norm, unit};
 use crate::mesh::surface::{PolySurface, QuadSurface};
@@ -536,6 +537,7 @@ pub fn find_contour(
     adj: &Adjacency,
     params: &PrepareParams,
     file: &str,
+    cancel: &CancelToken,
 ) -> Result<Contour> {
     let pinch = pinch_distances(s, adj, params.pinch);
     let mut seen_loops: BTreeSet<Vec<u32>> = BTreeSet::new();
@@ -543,7 +545,7 @@ pub fn find_contour(
     let max_len = 4 * s.vertices.len().min(4000);
     for v in 0..s.vertices.len() as u32 {
         if v % 256 == 0 {
-            crate::driver::check_stop(|| {
+            cancel.check(|| {
                 format!("face stopped while finding the lips of {file}; nothing written")
             })?;
         }
@@ -652,6 +654,18 @@ pub fn prepare(
     params: &PrepareParams,
     file: &str,
 ) -> Result<FaceSource> {
+    prepare_with(head, rig, frame, params, file, &CancelToken::new())
+}
+
+/// [`prepare`], stopped by `cancel` while it looks for the lips.
+pub fn prepare_with(
+    head: &PolySurface,
+    rig: &FaceRig,
+    frame: InputFrame,
+    params: &PrepareParams,
+    file: &str,
+    cancel: &CancelToken,
+) -> Result<FaceSource> {
     frame.check(file)?;
     check_head_size(head, file)?;
     // the rig's errors name its file and field (or the head's file and `rig.FIELD`)
@@ -727,7 +741,7 @@ pub fn prepare(
             "the rig's upper_lip and lower_lip",
         )
     } else if refined.parents.is_empty() {
-        match find_contour(&s, &adj, params, file) {
+        match find_contour(&s, &adj, params, file, cancel) {
             Ok(c) => (c, "the closed edge loop"),
             Err(e @ Error::Cancelled(_)) => return Err(e),
             Err(loops) => (
@@ -1849,9 +1863,15 @@ mod tests {
             }
         }
         // without a nose up cannot be told from down
-        let e = detect_axes(&PolySurface::from_quads(&head), 1e-3, &params, "flat.obj")
-            .unwrap_err()
-            .to_string();
+        let e = detect_axes(
+            &PolySurface::from_quads(&head),
+            1e-3,
+            &params,
+            "flat.obj",
+            &CancelToken::new(),
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("flat.obj") && e.contains("up from down"), "{e}");
         // a nose: the flange vertex 16.6 mm above the mouth's middle, 10 mm forward
         let nose = (0..head.vertices.len())
@@ -1866,7 +1886,14 @@ mod tests {
         for v in zup.vertices.iter_mut() {
             *v = [v[0], -v[2], v[1]];
         }
-        let d = detect_axes(&PolySurface::from_quads(&zup), 1e-3, &params, "zup.obj").unwrap();
+        let d = detect_axes(
+            &PolySurface::from_quads(&zup),
+            1e-3,
+            &params,
+            "zup.obj",
+            &CancelToken::new(),
+        )
+        .unwrap();
         assert_eq!(d.up, [0.0, 0.0, 1.0]);
         assert_eq!(d.forward, [0.0, -1.0, 0.0]);
         assert!(d.note.contains("up +Z, forward -Y"), "{}", d.note);

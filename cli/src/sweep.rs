@@ -71,7 +71,7 @@ pub fn sweep(o: &Options) -> Result<()> {
     let results: Vec<Outcome> = all.into_iter().flatten().collect();
     let failed = results.iter().filter(|r| r.status != Some(0)).count();
     let js = out.join("sweep.json");
-    let stopped = sticky_lips::driver::stop_requested();
+    let stopped = crate::progress::cancel_token().is_cancelled();
     let json = serde_json::to_vec_pretty(&serde_json::json!({
         "spec": file,
         "base": base_name,
@@ -143,7 +143,7 @@ fn run_local(jobs: &[Job], at_once: usize) -> Result<Vec<Option<Outcome>>> {
     let mut next = 0;
     let mut forwarded = false;
     while (next < jobs.len() && !forwarded) || !running.is_empty() {
-        if sticky_lips::driver::stop_requested() && !forwarded {
+        if crate::progress::cancel_token().is_cancelled() && !forwarded {
             forwarded = true;
             #[cfg(unix)]
             for (_, child, _) in &running {

@@ -12,11 +12,12 @@ mod runs;
 
 pub use runs::Model;
 
+use crate::progress::Progress;
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
-use sticky_lips::driver::{Backend, Progress};
+use sticky_lips::driver::Backend;
 use sticky_lips::error::{Error, Location, Result};
 use sticky_lips::render::{save_png, Image};
 use sticky_lips::Precision;
@@ -100,7 +101,7 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
     let all = runs::all(opts.model, opts.quick);
     let mut done: BTreeMap<String, runs::Run> = BTreeMap::new();
     for spec in all.iter().filter(|s| needed.contains(&s.name)) {
-        sticky_lips::driver::check_stop(|| {
+        crate::progress::cancel_token().check(|| {
             format!(
                 "paper stopped before run {} ({} of {} runs done; each finished run's files are complete)",
                 spec.name,
@@ -126,7 +127,7 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
     let mut written = Vec::new();
     let mut per_figure = serde_json::Map::new();
     for f in &selected {
-        sticky_lips::driver::check_stop(|| {
+        crate::progress::cancel_token().check(|| {
             format!(
                 "paper stopped before figure {} (the runs are complete; `paper --reuse` draws the figures from them)",
                 f.name

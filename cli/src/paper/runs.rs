@@ -99,7 +99,8 @@ pub fn run(opts: &PaperOptions, s: &Spec) -> Result<Run> {
                 backend: opts.backend,
                 threads: opts.threads,
                 force_dt: false,
-                progress: opts.progress,
+                cancel: crate::progress::cancel_token(),
+                progress: opts.progress.callback(),
                 checkpoint_every: None,
                 restart: false,
                 // the figures read the frames; caches of each run are `sticky-lips export`'s

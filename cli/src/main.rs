@@ -5,13 +5,15 @@
 
 mod paper;
 mod preview;
+mod progress;
 mod sweep;
 
 use clap::{Parser, Subcommand, ValueEnum};
+use progress::Progress;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use sticky_lips::driver::{self, Backend, Progress, RunOptions};
+use sticky_lips::driver::{self, Backend, RunOptions};
 use sticky_lips::element::hex8::GradientVariant;
 use sticky_lips::io::{niftysim, scenario};
 use sticky_lips::static_solve::StaticOptions;
@@ -123,9 +125,14 @@ enum Command {
         /// by the tissue's) or a count (1: single rate).
         #[arg(long, value_name = "auto|COUNT")]
         subcycles: Option<SubcyclesArg>,
-        /// No progress output.
-        #[arg(long)]
+        /// No progress output (the same as `--progress none`).
+        #[arg(long, conflicts_with = "progress")]
         quiet: bool,
+        /// What is printed while stepping: a bar (default on a terminal), a plain line every
+        /// 10 % (default otherwise), one JSON object per line on stdout (for programs that
+        /// drive the CLI), or nothing.
+        #[arg(long, value_enum, value_name = "bar|plain|json|none")]
+        progress: Option<Progress>,
     },
     /// Static equilibrium (Newton with load stepping) at the end-of-run loads.
     Equilibrium {
@@ -472,7 +479,7 @@ fn main() -> ExitCode {
         let now = std::time::Instant::now();
         let first = *FIRST.get_or_init(|| now);
         if first == now {
-            sticky_lips::driver::request_stop();
+            progress::cancel_token().cancel();
         } else if now.duration_since(first).as_secs_f64() > SIGNAL_BURST_S {
             sticky_lips::io::atomic::remove_pending();
             eprintln!("interrupted twice: stopped at once; temporary files removed, the last frames may be missing");
@@ -507,6 +514,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             dt,
             subcycles,
             quiet,
+            progress,
         } => {
             let default = input.is_none() && restart.is_none();
             let input = InputArgs {
@@ -535,12 +543,10 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                 (Some(dir), _) => dir.clone(),
                 (None, o) => out_dir(o, default_out, &input.input),
             };
-            let progress = if quiet {
-                Progress::Quiet
-            } else if std::io::stderr().is_terminal() {
-                Progress::Bar
-            } else {
-                Progress::Plain
+            let progress = match (quiet, progress) {
+                (true, _) => Progress::None,
+                (false, Some(p)) => p,
+                (false, None) => Progress::default_for_stderr(),
             };
             let opts = RunOptions {
                 out: out.clone(),
@@ -548,12 +554,36 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                 backend: backend.backend(),
                 threads: all_cores(threads),
                 force_dt,
-                progress,
+                cancel: progress::cancel_token(),
+                progress: progress.callback(),
                 checkpoint_every,
                 restart: restart.is_some(),
                 export: true,
             };
-            let s = driver::run(&p, &opts)?;
+            let json = progress == Progress::Json;
+            let s = match driver::run(&p, &opts) {
+                Err(sticky_lips::Error::Interrupted { step, time }) if json => {
+                    progress::json_line(&serde_json::json!({
+                        "event": "interrupted", "step": step, "time": time, "out": out,
+                    }));
+                    return Err(sticky_lips::Error::Interrupted { step, time });
+                }
+                r => r?,
+            };
+            if json {
+                if s.export.is_some() {
+                    preview::write(&p, &out)?;
+                }
+                progress::json_line(&serde_json::json!({
+                    "event": "finished",
+                    "out": out,
+                    "steps": s.steps,
+                    "simulated_time": s.simulated_time,
+                    "frames": s.frames,
+                    "wall_time": s.wall_time,
+                }));
+                return Ok(());
+            }
             println!(
                 "{}: {} steps, t = {:.6} s, {} frames in {}; wall {:.3} s, {:.3e} element-updates/s ({}, {}, {} thread{})",
                 p.source,
@@ -675,7 +705,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                 println!("export: the skin mapping written to {}", path.display());
                 return Ok(());
             }
-            let e = sticky_lips::export::export(skin, &run_dir)?;
+            let e = sticky_lips::export::export_with(skin, &run_dir, &progress::cancel_token())?;
             preview::write(&p, &run_dir)?;
             println!(
                 "export: {} frames of {} vertices ({} over the model, {} beside it, {} following the jaw) to {}",
@@ -701,7 +731,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             let progress = if std::io::stderr().is_terminal() {
                 Progress::Bar
             } else {
-                Progress::Quiet
+                Progress::None
             };
             paper::paper(&paper::PaperOptions {
                 out,
@@ -1310,9 +1340,8 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
     sticky_lips::io::atomic::refuse_overwriting_inputs(a.out, &FACE_OUTPUTS, &inputs)?;
     let head = sticky_lips::io::obj::read_polygons(a.input)?;
     face::check_head_size(&head, &file)?;
-    sticky_lips::driver::check_stop(|| {
-        "face stopped after reading the head; nothing written".into()
-    })?;
+    progress::cancel_token()
+        .check(|| "face stopped after reading the head; nothing written".into())?;
     let scale = if a.units == "auto" {
         let (unit, scale) = detect_units(&head, &file)?;
         println!("face: units {unit}, from the head's size (give --units to choose)");
@@ -1350,12 +1379,20 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
     let (up, forward, axes_note) = match given {
         Some((up, forward)) => (up, forward, None),
         None => {
-            let d = face::lips::detect_axes(&head, scale, &params, &file)?;
+            let d =
+                face::lips::detect_axes(&head, scale, &params, &file, &progress::cancel_token())?;
             (d.up, d.forward, Some(d.note))
         }
     };
     let frame = face::InputFrame { scale, up, forward };
-    let mut src = face::prepare(&head, &rig, frame, &params, &file)?;
+    let mut src = face::prepare_with(
+        &head,
+        &rig,
+        frame,
+        &params,
+        &file,
+        &progress::cancel_token(),
+    )?;
     if let Some(n) = axes_note {
         src.data.notes.insert(0, n);
     }
@@ -1367,7 +1404,7 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
     // written: a refusal leaves no partial output
     let model = face::build(&src, &fp, &file)?;
     let stopped = || "face stopped before writing anything".to_string();
-    sticky_lips::driver::check_stop(stopped)?;
+    progress::cancel_token().check(stopped)?;
     let staging =
         sticky_lips::io::atomic::Staging::new(a.out, "face").map_err(|e| Error::io(a.out, e))?;
     let dir = staging.path();
@@ -1408,7 +1445,7 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
         )?
     );
     let problem = scenario::parse(&text, &path)?.problem;
-    sticky_lips::driver::check_stop(stopped)?;
+    progress::cancel_token().check(stopped)?;
     sticky_lips::io::atomic::write_atomic(&path, text.as_bytes())
         .map_err(|e| Error::io(&path, e))?;
     // and a picture of its material groups
@@ -1417,7 +1454,7 @@ fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
         sticky_lips::render::save_png(&dir.join("groups.png"), &img)?;
     }
     // every file is written and checked: all move into --out together
-    sticky_lips::driver::check_stop(stopped)?;
+    progress::cancel_token().check(stopped)?;
     staging.commit().map_err(|e| Error::io(a.out, e))?;
     for n in src.data.notes.iter().chain(&model.notes) {
         println!("face: {n}");
