@@ -13,6 +13,7 @@
 // rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod app;
 pub mod blend;
 pub mod claims;
 pub mod control;

@@ -4,7 +4,6 @@
 //! COMMAND` prints each one's options, and README.md shows them in use.
 
 mod paper;
-mod preview;
 mod progress;
 mod sweep;
 
@@ -13,9 +12,9 @@ use progress::Progress;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use sticky_lips::app;
 use sticky_lips::driver::{self, Backend, RunOptions};
-use sticky_lips::element::hex8::GradientVariant;
-use sticky_lips::io::{niftysim, scenario};
+use sticky_lips::io::scenario;
 use sticky_lips::static_solve::StaticOptions;
 use sticky_lips::tled::precompute::Discretisation;
 use sticky_lips::tled::stability;
@@ -124,7 +123,7 @@ enum Command {
         /// (as many as the saliva's critical step needs; with `--dt auto` the step is then set
         /// by the tissue's) or a count (1: single rate).
         #[arg(long, value_name = "auto|COUNT")]
-        subcycles: Option<SubcyclesArg>,
+        subcycles: Option<app::input::Subcycles>,
         /// No progress output (the same as `--progress none`).
         #[arg(long, conflicts_with = "progress")]
         quiet: bool,
@@ -322,134 +321,27 @@ enum Command {
     },
 }
 
+impl InputArgs {
+    fn input(&self) -> app::input::Input {
+        app::input::Input {
+            path: self.input.clone(),
+            niftysim_compat: self.niftysim_compat,
+        }
+    }
+}
+
 fn load(args: &InputArgs) -> sticky_lips::Result<(Problem, Option<PathBuf>)> {
-    load_with_dt(args, None, None)
+    app::input::load(&args.input())
 }
 
-/// `--subcycles auto|COUNT`.
-#[derive(Clone, Copy, Debug)]
-enum SubcyclesArg {
-    Auto,
-    Count(i64),
-}
-
-impl std::str::FromStr for SubcyclesArg {
-    type Err = String;
-    fn from_str(s: &str) -> std::result::Result<Self, String> {
-        match (s, s.parse::<i64>()) {
-            ("auto", _) => Ok(SubcyclesArg::Auto),
-            (_, Ok(n)) if n >= 1 => Ok(SubcyclesArg::Count(n)),
-            _ => Err(format!(
-                "`{s}`: give auto or a whole number of substeps (at least 1)"
-            )),
-        }
-    }
-}
-
-/// [`load`], at the time step `dt` where given (`scenario::with_dt`; for a NiftySim model
-/// seconds only, the frames' interval kept).
-fn load_with_dt(
-    args: &InputArgs,
-    dt: Option<scenario::DtChoice>,
-    subcycles: Option<SubcyclesArg>,
-) -> sticky_lips::Result<(Problem, Option<PathBuf>)> {
-    let name = args.input.display().to_string();
-    let is_toml = args
-        .input
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
-    if let Some(k) = subcycles {
-        if !is_toml {
-            return Err(sticky_lips::Error::input(
-                "command line",
-                sticky_lips::error::Location::Field("--subcycles".into()),
-                format!("subcycling applies to scenarios (.toml); {name} is a NiftySim model"),
-            ));
-        }
-        let mut text = scenario::read_text(&args.input)?;
-        if let Some(dt) = dt {
-            text = scenario::with_dt(&text, &name, dt)?;
-        }
-        let value = match k {
-            SubcyclesArg::Auto => toml::Value::String("auto".into()),
-            SubcyclesArg::Count(n) => toml::Value::Integer(n),
-        };
-        let text = scenario::with_overrides(&text, &name, &[("time.subcycles", value)])?;
-        let s = scenario::parse(&text, &args.input)?;
-        return Ok((s.problem, s.default_output));
-    }
-    let Some(dt) = dt else {
-        return load_plain(args);
-    };
-    if is_toml {
-        let text = scenario::read_text(&args.input)?;
-        let text = scenario::with_dt(&text, &name, dt)?;
-        let s = scenario::parse(&text, &args.input)?;
-        return Ok((s.problem, s.default_output));
-    }
-    let (mut p, out) = load_plain(args)?;
-    match dt {
-        scenario::DtChoice::Seconds(x) => {
-            let interval = p.time.output_every as f64 * p.time.dt;
-            p.time.output_every = (interval / x).round().max(1.0) as usize;
-            p.time.dt = x;
-            p.validate()?;
-            Ok((p, out))
-        }
-        scenario::DtChoice::Auto => Err(sticky_lips::Error::input(
-            "command line",
-            sticky_lips::error::Location::Field("--dt".into()),
-            format!("auto applies to scenarios (.toml); {name} is a NiftySim model: give seconds"),
-        )),
-    }
-}
-
-fn load_plain(args: &InputArgs) -> sticky_lips::Result<(Problem, Option<PathBuf>)> {
-    let ext = args
-        .input
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
-    match ext.as_str() {
-        "xml" => {
-            let variant = if args.niftysim_compat {
-                GradientVariant::Centroid
-            } else {
-                GradientVariant::MeanGradient
-            };
-            let p = niftysim::read(&args.input, variant, args.niftysim_compat)?;
-            p.validate()?;
-            Ok((p, None))
-        }
-        "toml" => {
-            if args.niftysim_compat {
-                return Err(sticky_lips::Error::input(
-                    args.input.display().to_string(),
-                    sticky_lips::error::Location::None,
-                    "--niftysim-compat applies to NiftySim XML models only",
-                ));
-            }
-            let s = scenario::read(&args.input)?;
-            Ok((s.problem, s.default_output))
-        }
-        _ => Err(sticky_lips::Error::input(
-            args.input.display().to_string(),
-            sticky_lips::error::Location::None,
-            "unknown input kind: expected a .toml scenario or a .xml NiftySim model",
-        )),
-    }
-}
-
-fn out_dir(explicit: Option<PathBuf>, default: Option<PathBuf>, input: &Path) -> PathBuf {
-    explicit.or(default).unwrap_or_else(|| {
-        Path::new("out").join(
-            input
-                .file_stem()
-                .map(|s| s.to_string_lossy().to_string())
-                .unwrap_or_else(|| "run".into()),
-        )
-    })
+fn default_job(out: Option<&Path>, dt: Option<scenario::DtChoice>) -> sticky_lips::Result<PathBuf> {
+    let dir = out.map_or_else(|| PathBuf::from("out/face"), Path::to_path_buf);
+    let path = dir.join("scenario.toml");
+    let text = app::input::default_job_text(&path, dt)?;
+    std::fs::create_dir_all(&dir).map_err(|e| sticky_lips::Error::io(&dir, e))?;
+    sticky_lips::io::atomic::write_atomic(&path, text.as_bytes())
+        .map_err(|e| sticky_lips::Error::io(&path, e))?;
+    Ok(path)
 }
 
 /// Exit status of a run stopped by SIGINT or SIGTERM (128 + SIGINT's number, as shells
@@ -527,7 +419,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             };
             // the default job's scenario already has the step asked for
             let (p, default_out) =
-                load_with_dt(&input, if default { None } else { dt }, subcycles)?;
+                app::input::load_with(&input.input(), if default { None } else { dt }, subcycles)?;
             let out = match (&restart, out) {
                 (Some(dir), Some(o)) if o != *dir => {
                     return Err(sticky_lips::Error::input(
@@ -541,7 +433,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                     ))
                 }
                 (Some(dir), _) => dir.clone(),
-                (None, o) => out_dir(o, default_out, &input.input),
+                (None, o) => app::input::out_dir(o, default_out, &input.input),
             };
             let progress = match (quiet, progress) {
                 (true, _) => Progress::None,
@@ -572,7 +464,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             };
             if json {
                 if s.export.is_some() {
-                    preview::write(&p, &out)?;
+                    app::preview::write(&p, &out)?;
                 }
                 progress::json_line(&serde_json::json!({
                     "event": "finished",
@@ -600,7 +492,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             );
             if let Some(e) = &s.export {
                 let t = std::time::Instant::now();
-                preview::write(&p, &out)?;
+                app::preview::write(&p, &out)?;
                 println!(
                     "{}: skin.obj, skin.pc2, skin.mdd, skin.usda ({} frames of {} vertices; {:.2} s) and preview.png, preview_sheet.png ({:.2} s)",
                     out.display(),
@@ -618,7 +510,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             load_steps,
         } => {
             let (p, default_out) = load(&input)?;
-            let out = out_dir(out, default_out, &input.input);
+            let out = app::input::out_dir(out, default_out, &input.input);
             let opts = RunOptions::new(out.clone(), Precision::F64, all_cores(threads));
             let so = StaticOptions {
                 load_steps,
@@ -706,7 +598,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
                 return Ok(());
             }
             let e = sticky_lips::export::export_with(skin, &run_dir, &progress::cancel_token())?;
-            preview::write(&p, &run_dir)?;
+            app::preview::write(&p, &run_dir)?;
             println!(
                 "export: {} frames of {} vertices ({} over the model, {} beside it, {} following the jaw) to {}",
                 e.frames,
@@ -763,16 +655,33 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             params,
             resolution,
             out,
-        } => face(&FaceArgs {
-            input: &input,
-            rig: rig.as_deref(),
-            units: &units,
-            up: &up,
-            forward: &forward,
-            params: params.as_deref(),
-            resolution,
-            out: &out,
-        })?,
+        } => {
+            let r = app::face::face(
+                &app::face::FaceJob {
+                    input: &input,
+                    rig: rig.as_deref(),
+                    units: &units,
+                    up: &up,
+                    forward: &forward,
+                    params: params.as_deref(),
+                    resolution,
+                    out: &out,
+                },
+                &progress::cancel_token(),
+            )?;
+            if let Some(unit) = r.detected_unit {
+                println!("face: units {unit}, from the head's size (give --units to choose)");
+            }
+            for n in &r.notes {
+                println!("face: {n}");
+            }
+            println!(
+                "face: wrote face.obj, face.json, head.obj, head.json (the source), model.obj, mesh.vtu, model.xml (resolution {}), groups.png and scenario.toml to {} in {:.2} s",
+                resolution,
+                out.display(),
+                r.seconds
+            );
+        }
         Command::Extrude {
             surface,
             thickness,
@@ -919,36 +828,6 @@ fn steps_arg(s: &str) -> Result<usize, String> {
 /// `sticky-lips run` without an input: the sticky lips opening on the MakeHuman face (the
 /// paper's `fig4_sticky` run at `--quick` resolution: Table 1, the wide jaw opening), its
 /// scenario written to `OUT/scenario.toml` (OUT: `--out`, else `out/face`) and run from there.
-fn default_job(out: Option<&Path>, dt: Option<scenario::DtChoice>) -> sticky_lips::Result<PathBuf> {
-    use sticky_lips::paper::{scenario_of, spec, Model};
-    let dir = out.map_or_else(|| PathBuf::from("out/face"), Path::to_path_buf);
-    let path = dir.join("scenario.toml");
-    let run = spec(Model::Face, true, "fig4_sticky").expect("the paper defines fig4_sticky");
-    let (text, _) = scenario_of(Model::Face, true, &run, &path)?;
-    let label = path.display().to_string();
-    // at dt = "auto" unless asked otherwise: the frames every 10 ms and eq. 11's decay in
-    // physical time (Table 1's 0.99 per 1e-5 s), as the paper's run has them
-    let text = scenario::with_dt(&text, &label, dt.unwrap_or(scenario::DtChoice::Auto))?;
-    let text = format!(
-        "# sticky-lips run (no input given): the sticky lips opening on the MakeHuman face, the\n\
-         # paper's run fig4_sticky at the quick resolution, at dt = {}; `sticky-lips run {label}`\n\
-         # repeats it.\n{}",
-        match dt {
-            Some(scenario::DtChoice::Seconds(x)) => format!("{x:e} s"),
-            _ => "\"auto\" (Table 1's physics, the step from the model's critical step)".into(),
-        },
-        sticky_lips::io::scenario::with_overrides(
-            &text,
-            &label,
-            &[("output.dir", toml::Value::String(".".into()))],
-        )?
-    );
-    std::fs::create_dir_all(&dir).map_err(|e| sticky_lips::Error::io(&dir, e))?;
-    sticky_lips::io::atomic::write_atomic(&path, text.as_bytes())
-        .map_err(|e| sticky_lips::Error::io(&path, e))?;
-    Ok(path)
-}
-
 /// The input a finished or interrupted run in `dir` solved (its summary's `input`).
 fn run_input(dir: &Path) -> sticky_lips::Result<PathBuf> {
     let path = dir.join("summary.json");
@@ -1093,67 +972,6 @@ fn blend(input: &InputArgs, shapes: &[String], out: &Path) -> sticky_lips::Resul
     Ok(())
 }
 
-fn write_mesh_outputs(
-    out: &Path,
-    mesh: &sticky_lips::mesh::Mesh,
-    groups: &[(String, Vec<u32>)],
-) -> sticky_lips::Result<()> {
-    use sticky_lips::error::Error;
-    use sticky_lips::io::vtu::{write_vtu, DataArray, VtuFrame};
-    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
-    let mut material = vec![0i32; mesh.elements.len()];
-    for (g, (_, els)) in groups.iter().enumerate() {
-        for &e in els {
-            material[e as usize] = g as i32;
-        }
-    }
-    let zero = vec![0.0; 3 * mesh.nodes.len()];
-    let frame = VtuFrame {
-        points: &mesh.nodes,
-        hexahedra: &mesh.elements,
-        point_data: vec![DataArray::F64 {
-            name: "displacement",
-            components: 3,
-            data: &zero,
-        }],
-        cell_data: vec![DataArray::I32 {
-            name: "material",
-            components: 1,
-            data: &material,
-        }],
-        time: None,
-    };
-    let vtu = out.join("mesh.vtu");
-    write_vtu(&vtu, &frame).map_err(|e| Error::io(&vtu, e))?;
-    let sets: Vec<niftysim::SetMaterial> = groups
-        .iter()
-        .map(|(name, els)| {
-            // meshes written without a scenario get Table 1's materials
-            let m = if name == "saliva" {
-                sticky_lips::problem::table1::SALIVA
-            } else {
-                sticky_lips::problem::table1::TISSUE
-            };
-            niftysim::SetMaterial {
-                elements: els,
-                mu: m.mu,
-                bulk: m.bulk,
-                density: m.density,
-            }
-        })
-        .collect();
-    use sticky_lips::problem::table1;
-    niftysim::write_model(
-        &out.join("model.xml"),
-        mesh,
-        &sets,
-        table1::TIME_STEP,
-        table1::TOTAL_TIME,
-        table1::DAMPING,
-        table1::HOURGLASS_KAPPA,
-    )
-}
-
 fn mouth(params: Option<&Path>, resolution: Option<f64>, out: &Path) -> sticky_lips::Result<()> {
     use sticky_lips::error::{Error, Location};
     use sticky_lips::mesh::mouth;
@@ -1194,7 +1012,7 @@ fn mouth(params: Option<&Path>, resolution: Option<f64>, out: &Path) -> sticky_l
             )
         })
         .collect();
-    write_mesh_outputs(out, &model.mesh, &groups)?;
+    app::mesh_outputs::write(out, &model.mesh, &groups)?;
     let info = serde_json::json!({
         "hexahedra": model.mesh.elements.len(),
         "nodes": model.mesh.nodes.len(),
@@ -1222,248 +1040,6 @@ fn mouth(params: Option<&Path>, resolution: Option<f64>, out: &Path) -> sticky_l
         model.mesh.element_sets.get("saliva").map_or(0, |s| s.len()),
         t0.elapsed().as_secs_f64(),
         out.display()
-    );
-    Ok(())
-}
-
-struct FaceArgs<'a> {
-    input: &'a Path,
-    rig: Option<&'a Path>,
-    units: &'a str,
-    up: &'a str,
-    forward: &'a str,
-    params: Option<&'a Path>,
-    resolution: f64,
-    out: &'a Path,
-}
-
-/// Metres per unit of a length unit's name.
-fn unit_scale(name: &str) -> Option<f64> {
-    scenario::LengthUnit::from_name(name).map(scenario::LengthUnit::metres)
-}
-
-/// The unit in which a head's largest extent (of the vertices its faces use) is that of a
-/// human head, 0.12 to 0.45 m; an error naming the candidates when none or several are.
-fn detect_units(
-    head: &sticky_lips::mesh::surface::PolySurface,
-    file: &str,
-) -> sticky_lips::Result<(&'static str, f64)> {
-    let (lo, hi) = sticky_lips::linalg::bounding_box(
-        head.faces
-            .iter()
-            .flatten()
-            .map(|&v| &head.vertices[v as usize]),
-    );
-    let extent = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
-    let fits: Vec<(&'static str, f64)> = scenario::LengthUnit::ALL
-        .iter()
-        .map(|u| (u.name(), u.metres()))
-        .filter(|&(_, s)| (0.12..=0.45).contains(&(extent * s)))
-        .collect();
-    match fits.as_slice() {
-        [one] => Ok(*one),
-        _ => Err(sticky_lips::Error::input(
-            file,
-            sticky_lips::error::Location::Field("--units".into()),
-            format!(
-                "the head's largest extent is {extent} units, a head's (0.12 to 0.45 m) in {}: give --units",
-                if fits.is_empty() {
-                    "none of m, dm, cm, mm, in".to_string()
-                } else {
-                    fits.iter().map(|f| f.0).collect::<Vec<_>>().join(" and ")
-                }
-            ),
-        )),
-    }
-}
-
-/// The files `face` writes into its output directory.
-const FACE_OUTPUTS: [&str; 9] = [
-    "face.obj",
-    "face.json",
-    "head.obj",
-    "head.json",
-    "model.obj",
-    "mesh.vtu",
-    "model.xml",
-    "groups.png",
-    "scenario.toml",
-];
-
-fn face(a: &FaceArgs) -> sticky_lips::Result<()> {
-    use sticky_lips::error::{Error, Location};
-    use sticky_lips::mesh::face;
-    let t0 = std::time::Instant::now();
-    let file = a.input.display().to_string();
-    // the command line's values first, then the files
-    let detect = match (a.up == "auto", a.forward == "auto") {
-        (true, true) => true,
-        (false, false) => false,
-        _ => {
-            return Err(Error::input(
-                "command line",
-                Location::Field(if a.up == "auto" { "--up" } else { "--forward" }.into()),
-                "give both --up and --forward, or neither (both detected)",
-            ))
-        }
-    };
-    let given = if detect {
-        None
-    } else {
-        Some((
-            sticky_lips::io::args::vec3(a.up, "--up")?,
-            sticky_lips::io::args::vec3(a.forward, "--forward")?,
-        ))
-    };
-    if a.units != "auto" && unit_scale(a.units).is_none() {
-        return Err(Error::input(
-            "command line",
-            Location::Field("--units".into()),
-            format!("unknown unit `{}` (m, dm, cm, mm, in or auto)", a.units),
-        ));
-    }
-    // the model's parameters (only --resolution comes from the command line) before the
-    // head is read: a model too large for the memory budget is refused here
-    face::FaceParams {
-        resolution: a.resolution,
-        ..Default::default()
-    }
-    .validate("command line", "--")?;
-    // nothing the command writes may land on one of its inputs
-    let mut inputs = vec![(a.input, "the head")];
-    if let Some(r) = a.rig {
-        inputs.push((r, "the rig (--rig)"));
-    }
-    if let Some(p) = a.params {
-        inputs.push((p, "the crop parameters (--params)"));
-    }
-    sticky_lips::io::atomic::refuse_overwriting_inputs(a.out, &FACE_OUTPUTS, &inputs)?;
-    let head = sticky_lips::io::obj::read_polygons(a.input)?;
-    face::check_head_size(&head, &file)?;
-    progress::cancel_token()
-        .check(|| "face stopped after reading the head; nothing written".into())?;
-    let scale = if a.units == "auto" {
-        let (unit, scale) = detect_units(&head, &file)?;
-        println!("face: units {unit}, from the head's size (give --units to choose)");
-        scale
-    } else {
-        unit_scale(a.units).ok_or_else(|| {
-            Error::input(
-                "command line",
-                Location::Field("--units".into()),
-                format!("unknown unit `{}` (m, dm, cm, mm, in or auto)", a.units),
-            )
-        })?
-    };
-    let rig: face::FaceRig = match a.rig {
-        Some(p) => {
-            let text = std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?;
-            face::FaceRig::from_json(&text, &p.display().to_string())?
-        }
-        None => face::FaceRig::default(),
-    };
-    let params: face::PrepareParams = match a.params {
-        Some(path) => {
-            let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-            toml::from_str(&text).map_err(|e| {
-                let line = e.span().map(|r| text[..r.start].matches('\n').count() + 1);
-                Error::input(
-                    path.display().to_string(),
-                    line.map(Location::Line).unwrap_or(Location::None),
-                    e.message(),
-                )
-            })?
-        }
-        None => face::PrepareParams::default(),
-    };
-    let (up, forward, axes_note) = match given {
-        Some((up, forward)) => (up, forward, None),
-        None => {
-            let d =
-                face::lips::detect_axes(&head, scale, &params, &file, &progress::cancel_token())?;
-            (d.up, d.forward, Some(d.note))
-        }
-    };
-    let frame = face::InputFrame { scale, up, forward };
-    let mut src = face::prepare_with(
-        &head,
-        &rig,
-        frame,
-        &params,
-        &file,
-        &progress::cancel_token(),
-    )?;
-    if let Some(n) = axes_note {
-        src.data.notes.insert(0, n);
-    }
-    let fp = face::FaceParams {
-        resolution: a.resolution,
-        ..Default::default()
-    };
-    // the model is built, its scenario parsed and its picture drawn before anything is
-    // written: a refusal leaves no partial output
-    let model = face::build(&src, &fp, &file)?;
-    let stopped = || "face stopped before writing anything".to_string();
-    progress::cancel_token().check(stopped)?;
-    let staging =
-        sticky_lips::io::atomic::Staging::new(a.out, "face").map_err(|e| Error::io(a.out, e))?;
-    let dir = staging.path();
-    face::write_dir(dir, &src)?;
-    sticky_lips::io::obj::write_obj(&dir.join("model.obj"), &model.surface)?;
-    let groups: Vec<(String, Vec<u32>)> = ["upper_face", "lower_face", "saliva"]
-        .iter()
-        .map(|g| {
-            (
-                g.to_string(),
-                model.mesh.element_sets.get(*g).cloned().unwrap_or_default(),
-            )
-        })
-        .collect();
-    write_mesh_outputs(dir, &model.mesh, &groups)?;
-    // a scenario that runs on it as it is: Table 1, the wide jaw opening with stickiness
-    let label = a.out.join("scenario.toml").display().to_string();
-    let path = dir.join("scenario.toml");
-    let text = format!(
-        "# sticky-lips face {}: Table 1 on this face (the paper's wide jaw opening with\n\
-         # stickiness); `sticky-lips run {label}`.\n{}",
-        a.input.display(),
-        scenario::with_overrides(
-            sticky_lips::paper::TABLE1,
-            sticky_lips::paper::TABLE1_NAME,
-            &[
-                ("mesh.file", toml::Value::String(".".into())),
-                ("mesh.face.resolution", toml::Value::Float(a.resolution)),
-                ("output.dir", toml::Value::String("run".into())),
-                (
-                    "title",
-                    toml::Value::String(format!(
-                        "Table 1 on {}: wide jaw opening, with stickiness",
-                        a.input.display()
-                    )),
-                ),
-            ],
-        )?
-    );
-    let problem = scenario::parse(&text, &path)?.problem;
-    progress::cancel_token().check(stopped)?;
-    sticky_lips::io::atomic::write_atomic(&path, text.as_bytes())
-        .map_err(|e| Error::io(&path, e))?;
-    // and a picture of its material groups
-    if let Some(cols) = &problem.physics.lip_columns {
-        let img = paper::look::groups_picture(&problem, cols, 900, 560);
-        sticky_lips::render::save_png(&dir.join("groups.png"), &img)?;
-    }
-    // every file is written and checked: all move into --out together
-    progress::cancel_token().check(stopped)?;
-    staging.commit().map_err(|e| Error::io(a.out, e))?;
-    for n in src.data.notes.iter().chain(&model.notes) {
-        println!("face: {n}");
-    }
-    println!(
-        "face: wrote face.obj, face.json, head.obj, head.json (the source), model.obj, mesh.vtu, model.xml (resolution {}), groups.png and scenario.toml to {} in {:.2} s",
-        a.resolution,
-        a.out.display(),
-        t0.elapsed().as_secs_f64()
     );
     Ok(())
 }
@@ -1505,7 +1081,7 @@ fn extrude(
             )
         })
         .collect();
-    write_mesh_outputs(out, &mesh, &groups)?;
+    app::mesh_outputs::write(out, &mesh, &groups)?;
     println!(
         "{}: {} quads in {} groups -> {} hexahedra, {} nodes; wrote mesh.vtu and model.xml to {}",
         file,

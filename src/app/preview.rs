@@ -3,9 +3,9 @@
 //! to [`ANIMATION_FRAMES`] frames spread evenly over the run, broken saliva elements left out
 //! so that the lips part), and `preview_sheet.png`, a contact sheet of [`SHEET_FRAMES`]
 //! frames labelled with their times. Rendered with the paper's mouth camera
-//! ([`crate::paper::look`]): on the shipped MakeHuman face through the face's skin texture on
+//! ([`crate::app::look`]): on the shipped MakeHuman face through the face's skin texture on
 //! the dark mouth interior, as the paper's figures of the face are
-//! ([`crate::paper::look::face_skin`]); on other models (the procedural mouth, a face of the
+//! ([`crate::app::look::face_skin`]); on other models (the procedural mouth, a face of the
 //! user's, which comes without a texture) in the material groups' colours of Fig. 2.
 //!
 //! The sheet's frames are centred on the opening, so that the zipper is shown: the opening
@@ -29,16 +29,16 @@
 //! samples, flat colours, the default compression, each frame file parsed twice) to 0.40 s,
 //! against 0.56 s for the run itself.
 
-use crate::paper::look::{
+use crate::app::look::{
     element_codes, face_skin, makehuman_masks, render_with, Paint, Quality, BLUE, CAVITY, GREEN,
     RED, SKIN, WHITE,
 };
+use crate::error::{Error, Result};
+use crate::render::{encode_apng, encode_png_fast, GridLabels, Image};
+use crate::Problem;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::path::Path;
-use sticky_lips::error::{Error, Result};
-use sticky_lips::render::{encode_apng, encode_png_fast, GridLabels, Image};
-use sticky_lips::Problem;
 
 pub const ANIMATION_FRAMES: usize = 27;
 pub const SHEET_FRAMES: usize = 8;
@@ -90,7 +90,7 @@ pub fn sheet_frames(len: usize, span: Option<(usize, usize)>, n: usize) -> Vec<u
 /// run's frames at the same times; `None` where it has not (an interrupted run).
 fn span_from_measures(dir: &Path, times: &[f64]) -> Option<Option<(usize, usize)>> {
     let text = std::fs::read(dir.join("measures.json")).ok()?;
-    let m: sticky_lips::measures::RunMeasures = serde_json::from_slice(&text).ok()?;
+    let m: crate::measures::RunMeasures = serde_json::from_slice(&text).ok()?;
     let matches = m.frames.len() == times.len()
         && m.frames
             .iter()
@@ -111,7 +111,7 @@ type Frame = (Vec<[f64; 3]>, Vec<bool>);
 fn read_frame(p: &Problem, path: &Path) -> Result<Frame> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     let name = path.display().to_string();
-    let mut arrays = sticky_lips::io::vtu::parse_arrays(
+    let mut arrays = crate::io::vtu::parse_arrays(
         &text,
         &name,
         &[("PointData", "displacement"), ("CellData", "saliva_broken")],
@@ -122,7 +122,7 @@ fn read_frame(p: &Problem, path: &Path) -> Result<Frame> {
     if u.len() != p.mesh.nodes.len() {
         return Err(Error::input(
             name,
-            sticky_lips::error::Location::Field("displacement".into()),
+            crate::error::Location::Field("displacement".into()),
             format!(
                 "{} points for a model of {} nodes",
                 u.len(),
@@ -156,7 +156,7 @@ pub fn write(p: &Problem, dir: &Path) -> Result<()> {
     let Some(cols) = &p.physics.lip_columns else {
         return Ok(());
     };
-    let entries = sticky_lips::export::read_pvd(dir)?;
+    let entries = crate::export::read_pvd(dir)?;
     let times: Vec<f64> = entries.iter().map(|e| e.0).collect();
     let read = |k: &usize| read_frame(p, &dir.join(&entries[*k].1));
     let anim_frames = spread(entries.len(), ANIMATION_FRAMES);
@@ -168,7 +168,7 @@ pub fn write(p: &Problem, dir: &Path) -> Result<()> {
             let broken: Vec<usize> = par_map(&all, |k| {
                 let path = dir.join(&entries[*k].1);
                 Ok(
-                    match sticky_lips::io::vtu::read_cell_data(&path, "saliva_broken") {
+                    match crate::io::vtu::read_cell_data(&path, "saliva_broken") {
                         Ok((b, _, _)) => b.iter().filter(|&&x| x > 0.0).count(),
                         Err(_) => 0,
                     },
@@ -186,8 +186,8 @@ pub fn write(p: &Problem, dir: &Path) -> Result<()> {
         .collect::<std::collections::BTreeSet<_>>()
         .into_iter()
         .collect();
-    let textured = p.mesh.uv.is_some()
-        && p.physics.model.as_deref() == Some(sticky_lips::mesh::face::MAKEHUMAN);
+    let textured =
+        p.mesh.uv.is_some() && p.physics.model.as_deref() == Some(crate::mesh::face::MAKEHUMAN);
     let (frames, skin) = rayon::join(
         || par_map(&needed, read),
         || {
@@ -269,7 +269,7 @@ pub fn write(p: &Problem, dir: &Path) -> Result<()> {
     );
     for (name, bytes) in [("preview_sheet.png", sheet), ("preview.png", apng)] {
         let path = dir.join(name);
-        sticky_lips::io::atomic::write_atomic(&path, &bytes).map_err(|e| Error::io(&path, e))?;
+        crate::io::atomic::write_atomic(&path, &bytes).map_err(|e| Error::io(&path, e))?;
     }
     Ok(())
 }
