@@ -8,10 +8,11 @@ pub use crate::io::output::EnergySeries;
 use crate::io::output::{Frame, FrameWriter, SalivaFrame};
 use crate::problem::Problem;
 use crate::real::{Precision, Real};
+pub use crate::run_dir::{Interruption, RunSummary};
 #[cfg(feature = "equilibrium")]
 use crate::static_solve::{solve_equilibrium, StaticOptions};
 use crate::tled::solver::{volume_ratios, Energies};
-use crate::tled::stability::{analyse, check_time_step, StabilityReport};
+use crate::tled::stability::{analyse, check_time_step};
 use crate::tled::Simulation;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -89,64 +90,6 @@ impl RunOptions {
             export: true,
         }
     }
-}
-
-fn one() -> usize {
-    1
-}
-fn is_one(k: &usize) -> bool {
-    *k == 1
-}
-
-/// `summary.json`: what a run did (read back by `paper --reuse`).
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-pub struct RunSummary {
-    pub input: String,
-    pub kind: String,
-    pub steps: usize,
-    pub simulated_time: f64,
-    pub dt: f64,
-    /// Substeps of the saliva layer per step (`tled::subcycle`); written when more than 1.
-    #[serde(default = "one", skip_serializing_if = "is_one")]
-    pub subcycles: usize,
-    pub wall_time: f64,
-    /// Wall time of the stepping loop alone (s), without output and precompute.
-    pub stepping_time: f64,
-    pub element_updates_per_second: f64,
-    pub precision: String,
-    /// `cpu`, or `gpu: <adapter>`.
-    pub backend: String,
-    pub threads: usize,
-    pub num_nodes: usize,
-    pub num_elements: usize,
-    pub variant: String,
-    pub niftysim_timing: bool,
-    pub critical_time_step: f64,
-    pub stability: Option<StabilityReport>,
-    pub frames: usize,
-    pub energy: EnergySeries,
-    /// Number of saliva elements, and how many are broken at each frame (same times as `energy`).
-    pub saliva_elements: usize,
-    pub broken_saliva: Vec<usize>,
-    pub newton_iterations: Option<usize>,
-    pub residual_norm: Option<f64>,
-    /// Where a run stopped by SIGINT or SIGTERM stopped (absent for a run that finished).
-    #[serde(skip_serializing_if = "Option::is_none", default)]
-    pub interrupted: Option<Interruption>,
-    /// The checkpoint step a restarted run continued from (absent for a run from the start);
-    /// `wall_time` is then the restarted process's, `stepping_time` all the stepping's.
-    #[serde(skip_serializing_if = "Option::is_none", default)]
-    pub restarted_from: Option<usize>,
-    /// The point caches and USD written after the frames ([`crate::export`]).
-    #[serde(skip_serializing_if = "Option::is_none", default)]
-    pub export: Option<crate::export::ExportSummary>,
-}
-
-/// The step and time at which a run was interrupted.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-pub struct Interruption {
-    pub step: usize,
-    pub time: f64,
 }
 
 /// Steps between two looks at the run's [`CancelToken`] (the stepping is cut into pieces of
@@ -493,7 +436,7 @@ fn run_with<S: Stepper>(
     };
     let mut summary = summary;
     if let Some(m) = &history.measures {
-        write_measures(&opts.out, m)?;
+        crate::run_dir::write_measures(&opts.out, m)?;
     }
     if let (Some(skin), true) = (&problem.physics.skin, opts.export) {
         // from the frames on disk: every one handed over first
@@ -564,22 +507,6 @@ fn record<S: Stepper>(
         volume_ratio,
         saliva,
     })
-}
-
-/// `measures.json`, `gap.csv` (lip gap profiles) and `series.csv` (open fraction, broken
-/// saliva elements, asymmetry over time), written atomically.
-pub fn write_measures(dir: &std::path::Path, m: &crate::measures::RunMeasures) -> Result<()> {
-    use crate::io::atomic::write_atomic;
-    let w = |name: &str, bytes: &[u8]| {
-        let p = dir.join(name);
-        write_atomic(&p, bytes).map_err(|e| crate::error::Error::io(&p, e))
-    };
-    w(
-        "measures.json",
-        &serde_json::to_vec_pretty(m).expect("measures serialise"),
-    )?;
-    w("gap.csv", m.gap_csv().as_bytes())?;
-    w("series.csv", m.series_csv().as_bytes())
 }
 
 /// Static equilibrium at the end-of-run loads, written like a run with one frame.

@@ -34,6 +34,7 @@ pub mod paper;
 pub mod problem;
 pub mod real;
 pub mod render;
+pub mod run_dir;
 #[cfg(feature = "equilibrium")]
 pub mod static_solve;
 pub mod sweep;

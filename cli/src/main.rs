@@ -412,7 +412,9 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             let input = InputArgs {
                 input: match (input, &restart) {
                     (Some(i), _) => i,
-                    (None, Some(dir)) => checkpoint_input(dir)?,
+                    (None, Some(dir)) => {
+                        sticky_lips::run_dir::RunDir::new(dir).checkpoint_input()?
+                    }
                     (None, None) => default_job(out.as_deref(), dt)?,
                 },
                 niftysim_compat,
@@ -562,7 +564,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             let input = InputArgs {
                 input: match scenario {
                     Some(s) => s,
-                    None => run_input(&run_dir)?,
+                    None => sticky_lips::run_dir::RunDir::new(&run_dir).input()?,
                 },
                 niftysim_compat: false,
             };
@@ -828,56 +830,6 @@ fn steps_arg(s: &str) -> Result<usize, String> {
 /// `sticky-lips run` without an input: the sticky lips opening on the MakeHuman face (the
 /// paper's `fig4_sticky` run at `--quick` resolution: Table 1, the wide jaw opening), its
 /// scenario written to `OUT/scenario.toml` (OUT: `--out`, else `out/face`) and run from there.
-/// The input a finished or interrupted run in `dir` solved (its summary's `input`).
-fn run_input(dir: &Path) -> sticky_lips::Result<PathBuf> {
-    let path = dir.join("summary.json");
-    let text = std::fs::read_to_string(&path).map_err(|e| sticky_lips::Error::io(&path, e))?;
-    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
-        sticky_lips::Error::input(
-            path.display().to_string(),
-            sticky_lips::error::Location::Line(e.line()),
-            e.to_string(),
-        )
-    })?;
-    let input = v
-        .get("input")
-        .and_then(|i| i.as_str())
-        .map(PathBuf::from)
-        .ok_or_else(|| {
-            sticky_lips::Error::field(
-                path.display().to_string(),
-                "input",
-                "missing: give the scenario with --scenario",
-            )
-        })?;
-    if !input.exists() {
-        return Err(sticky_lips::Error::field(
-            path.display().to_string(),
-            "input",
-            format!(
-                "names the scenario {}, which is not found from {}{}: give it with --scenario",
-                input.display(),
-                std::env::current_dir()
-                    .map(|d| d.display().to_string())
-                    .unwrap_or_else(|_| "here".into()),
-                if input.is_relative() {
-                    " (a relative path is read from the directory the run was started in)"
-                } else {
-                    ""
-                }
-            ),
-        ));
-    }
-    Ok(input)
-}
-
-fn checkpoint_input(dir: &Path) -> sticky_lips::Result<PathBuf> {
-    let path = dir.join(sticky_lips::io::checkpoint::FILE_NAME);
-    let (header, _) = sticky_lips::io::checkpoint::read(&path)?;
-    Ok(PathBuf::from(header.input))
-}
-
-/// The default of `--threads`: every core the process may use.
 fn all_cores(threads: Option<usize>) -> usize {
     threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
 }

@@ -180,30 +180,18 @@ fn run_local(jobs: &[Job], at_once: usize) -> Result<Vec<Option<Outcome>>> {
                 Some(st) => {
                     let (i, _, t0) = running.swap_remove(k);
                     let j = &jobs[i];
-                    let measures: Option<serde_json::Value> =
-                        std::fs::read(j.dir.join("measures.json"))
-                            .ok()
-                            .and_then(|b| serde_json::from_slice(&b).ok());
-                    let summary: Option<serde_json::Value> =
-                        std::fs::read(j.dir.join("summary.json"))
-                            .ok()
-                            .and_then(|b| serde_json::from_slice(&b).ok());
+                    let run = sticky_lips::run_dir::RunDir::new(&j.dir);
                     let o = Outcome {
                         name: j.name.clone(),
                         overrides: j.overrides.clone(),
                         dir: j.dir.clone(),
                         status: st.code(),
                         wall_seconds: t0.elapsed().as_secs_f64(),
-                        first_opening: measures
-                            .and_then(|m| serde_json::from_value(m["first_opening"].clone()).ok())
-                            .flatten(),
-                        broken_saliva: summary.and_then(|s| {
-                            s["broken_saliva"]
-                                .as_array()
-                                .and_then(|a| a.last())
-                                .and_then(|b| b.as_u64())
-                                .map(|b| b as usize)
-                        }),
+                        first_opening: run.measures().ok().and_then(|m| m.first_opening),
+                        broken_saliva: run
+                            .summary()
+                            .ok()
+                            .and_then(|s| s.broken_saliva.last().copied()),
                     };
                     println!(
                         "sweep: {} {} ({:.1} s)",

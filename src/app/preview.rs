@@ -89,8 +89,7 @@ pub fn sheet_frames(len: usize, span: Option<(usize, usize)>, n: usize) -> Vec<u
 /// The opening's span from the run's `measures.json` where it has a frame for each of the
 /// run's frames at the same times; `None` where it has not (an interrupted run).
 fn span_from_measures(dir: &Path, times: &[f64]) -> Option<Option<(usize, usize)>> {
-    let text = std::fs::read(dir.join("measures.json")).ok()?;
-    let m: crate::measures::RunMeasures = serde_json::from_slice(&text).ok()?;
+    let m = crate::run_dir::RunDir::new(dir).measures().ok()?;
     let matches = m.frames.len() == times.len()
         && m.frames
             .iter()
@@ -156,7 +155,7 @@ pub fn write(p: &Problem, dir: &Path) -> Result<()> {
     let Some(cols) = &p.physics.lip_columns else {
         return Ok(());
     };
-    let entries = crate::export::read_pvd(dir)?;
+    let entries = crate::run_dir::RunDir::new(dir).frames()?;
     let times: Vec<f64> = entries.iter().map(|e| e.0).collect();
     let read = |k: &usize| read_frame(p, &dir.join(&entries[*k].1));
     let anim_frames = spread(entries.len(), ANIMATION_FRAMES);

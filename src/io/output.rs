@@ -18,6 +18,18 @@ use std::sync::mpsc::{sync_channel, SyncSender};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 
+/// `summary.json`: what the run did (written last; an interrupted run's says where it stopped).
+pub const SUMMARY: &str = "summary.json";
+/// The ParaView collection listing the complete frames with their times.
+pub const PVD: &str = "frames.pvd";
+/// A copy of the last frame of a finished run.
+pub const FINAL: &str = "final.vtu";
+
+/// The file name of output frame `k`.
+pub fn frame_file(k: usize) -> String {
+    format!("frame_{k:06}.vtu")
+}
+
 /// The energies at each output frame: `summary.json`'s `energy`, and the part of a
 /// checkpoint's history ([`crate::io::checkpoint::RunHistory`]) that a restart continues.
 /// Defined here, below the driver, so that the checkpoint need not import the driver (which
@@ -144,7 +156,7 @@ impl FrameWriter {
         let mut keep_all = keep.clone();
         keep_all.push(crate::io::checkpoint::FILE_NAME);
         remove_stale(dir, &keep_all)?;
-        let pvd = dir.join("frames.pvd");
+        let pvd = dir.join(PVD);
         if frames.is_empty() {
             let _ = std::fs::remove_file(&pvd);
         } else {
@@ -176,7 +188,7 @@ impl FrameWriter {
                     match job {
                         Job::Frame { path, frame, pvd } => {
                             write_frame_file(&m, &path, &frame)?;
-                            let p = path.with_file_name("frames.pvd");
+                            let p = path.with_file_name(PVD);
                             write_pvd(&p, &pvd).map_err(|e| Error::io(&p, e))?;
                         }
                         Job::Checkpoint { path, bytes } => {
@@ -206,7 +218,7 @@ impl FrameWriter {
     /// Hands `frame_NNNNNN.vtu` and the updated `.pvd` to the writer thread.
     pub fn frame(&mut self, frame: Frame) -> Result<()> {
         self.check_lengths(&frame)?;
-        let name = format!("frame_{:06}.vtu", self.entries.len());
+        let name = frame_file(self.entries.len());
         self.entries.push(PvdEntry {
             time: frame.time,
             file: name.clone(),
@@ -306,10 +318,10 @@ impl FrameWriter {
         if let Some(name) = &self.last {
             let from = self.dir.join(name);
             let bytes = std::fs::read(&from).map_err(|e| Error::io(&from, e))?;
-            let to = self.dir.join("final.vtu");
+            let to = self.dir.join(FINAL);
             write_atomic(&to, &bytes).map_err(|e| Error::io(&to, e))?;
         }
-        let path = self.dir.join("summary.json");
+        let path = self.dir.join(SUMMARY);
         let json = serde_json::to_vec_pretty(summary).expect("summary serialises");
         write_atomic(&path, &json).map_err(|e| Error::io(&path, e))
     }
@@ -320,7 +332,7 @@ impl FrameWriter {
     /// has no final state, so no `final.vtu`.
     pub fn finish_interrupted<S: serde::Serialize>(mut self, summary: &S) -> Result<()> {
         self.join()?;
-        let path = self.dir.join("summary.json");
+        let path = self.dir.join(SUMMARY);
         let json = serde_json::to_vec_pretty(summary).expect("summary serialises");
         write_atomic(&path, &json).map_err(|e| Error::io(&path, e))
     }

@@ -4,12 +4,13 @@
 //! `summary.json`, and `scenario.toml`: the scenario it used, for `sticky-lips run`).
 
 use super::PaperOptions;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 use sticky_lips::driver::{self, RunOptions, RunSummary};
-use sticky_lips::error::{Error, Location, Result};
+use sticky_lips::error::{Error, Result};
 use sticky_lips::measures::{RunMeasures, ZipFront, ZIP_THRESHOLD};
 pub use sticky_lips::paper::{all, sweep_grid, sweep_name, Choice, Model, Spec};
+use sticky_lips::run_dir::RunDir;
 use sticky_lips::Problem;
 
 /// The face model the face runs are made of (the shipped MakeHuman face at the runs'
@@ -36,17 +37,6 @@ pub struct Run {
     pub wall: f64,
 }
 
-fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    serde_json::from_str(&text).map_err(|e| {
-        Error::input(
-            path.display().to_string(),
-            Location::Line(e.line()),
-            e.to_string(),
-        )
-    })
-}
-
 /// Runs `s` (or reuses its complete outputs with `--reuse`).
 pub fn run(opts: &PaperOptions, s: &Spec) -> Result<Run> {
     let label = opts.out.join("runs").join(&s.name).join("scenario.toml");
@@ -70,13 +60,14 @@ pub fn run(opts: &PaperOptions, s: &Spec) -> Result<Run> {
         problem.num_steps()
     );
     let t0 = Instant::now();
-    let previous: Option<RunSummary> = read_json(&dir.join("summary.json")).ok();
+    let run_dir = RunDir::new(&dir);
+    let previous: Option<RunSummary> = run_dir.summary().ok();
     let same_scenario = std::fs::read_to_string(dir.join("scenario.toml")).is_ok_and(|t| t == text);
     let complete = same_scenario
         && previous.as_ref().is_some_and(|v| {
             v.steps == problem.num_steps()
                 && v.num_elements == problem.mesh.elements.len()
-                && dir.join("measures.json").exists()
+                && run_dir.has_measures()
         });
     let reused = opts.reuse && complete;
     let summary = if reused {
@@ -113,7 +104,7 @@ pub fn run(opts: &PaperOptions, s: &Spec) -> Result<Run> {
     } else {
         t0.elapsed().as_secs_f64()
     };
-    let measures: RunMeasures = read_json(&dir.join("measures.json"))?;
+    let measures: RunMeasures = run_dir.measures()?;
     let zip = ZipFront::new(&measures, ZIP_THRESHOLD);
     Ok(Run {
         name: s.name.clone(),
@@ -144,21 +135,14 @@ impl Run {
         self.measures.frames.len().saturating_sub(1)
     }
 
-    fn frame_path(&self, frame: usize) -> PathBuf {
-        self.dir.join(format!("frame_{frame:06}.vtu"))
-    }
-
     /// Node displacements at output frame `frame` (m).
     pub fn displacement(&self, frame: usize) -> Result<Vec<[f64; 3]>> {
-        let (v, _, _) =
-            sticky_lips::io::vtu::read_point_data_f64(&self.frame_path(frame), "displacement")?;
-        Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+        RunDir::new(&self.dir).displacement(frame)
     }
 
     /// A saliva cell field at output frame `frame` (one value per element).
     pub fn cell_field(&self, frame: usize, name: &str) -> Result<Vec<f64>> {
-        let (v, _, _) = sticky_lips::io::vtu::read_cell_data(&self.frame_path(frame), name)?;
-        Ok(v)
+        RunDir::new(&self.dir).cell_field(frame, name)
     }
 
     /// Which elements are broken saliva elements at output frame `frame`.
