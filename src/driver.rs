@@ -432,6 +432,7 @@ fn run_with<S: Stepper>(
         residual_norm: None,
         interrupted: interrupted.clone(),
         restarted_from,
+        shapes: Vec::new(),
         export: None,
     };
     let mut summary = summary;
@@ -536,37 +537,17 @@ pub fn equilibrium(
         let strain = crate::tled::solver::strain_energy(&disc, &res.u);
         let report = analyse(problem, &disc);
         let summary = RunSummary {
-            input: problem.source.clone(),
-            kind: "static".into(),
             steps: res.newton_iterations,
-            simulated_time: problem.time.total_time,
-            dt: problem.time.dt,
-            subcycles: 1,
-            wall_time: t0.elapsed().as_secs_f64(),
-            stepping_time: 0.0,
-            element_updates_per_second: 0.0,
-            precision: "f64".into(),
-            backend: "cpu".into(),
-            threads: rayon::current_num_threads(),
-            num_nodes: problem.mesh.nodes.len(),
-            num_elements: problem.mesh.elements.len(),
-            variant: format!("{:?}", problem.numerics.variant),
-            niftysim_timing: problem.numerics.niftysim_timing,
-            critical_time_step: report.critical_time_step,
-            stability: Some(report),
-            frames: 1,
-            energy: EnergySeries {
-                time: vec![problem.time.total_time],
-                kinetic: vec![0.0],
-                strain: vec![strain],
-            },
-            saliva_elements: 0,
-            broken_saliva: Vec::new(),
             newton_iterations: Some(res.newton_iterations),
             residual_norm: Some(res.residual_norm),
-            interrupted: None,
-            restarted_from: None,
-            export: None,
+            ..RunSummary::one_frame(
+                problem,
+                "static",
+                problem.time.total_time,
+                report,
+                strain,
+                t0.elapsed().as_secs_f64(),
+            )
         };
         writer.finish(&summary)?;
         Ok(summary)

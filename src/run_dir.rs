@@ -67,9 +67,60 @@ pub struct RunSummary {
     /// `wall_time` is then the restarted process's, `stepping_time` all the stepping's.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub restarted_from: Option<usize>,
+    /// The shapes of a blend (`PATH.vtu=WEIGHT`; `kind` is `blend`), absent for a run.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub shapes: Vec<String>,
     /// The point caches and USD written after the frames ([`crate::export`]).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub export: Option<crate::export::ExportSummary>,
+}
+
+impl RunSummary {
+    /// The summary of a one-frame result at rest (a static solution, a blend): no steps, the
+    /// frame's strain energy at `time`, CPU and f64, `wall_time` as given.
+    pub fn one_frame(
+        problem: &crate::Problem,
+        kind: &str,
+        time: f64,
+        report: crate::tled::stability::StabilityReport,
+        strain: f64,
+        wall_time: f64,
+    ) -> RunSummary {
+        RunSummary {
+            input: problem.source.clone(),
+            kind: kind.into(),
+            steps: 0,
+            simulated_time: time,
+            dt: problem.time.dt,
+            subcycles: 1,
+            wall_time,
+            stepping_time: 0.0,
+            element_updates_per_second: 0.0,
+            precision: "f64".into(),
+            backend: "cpu".into(),
+            threads: rayon::current_num_threads(),
+            num_nodes: problem.mesh.nodes.len(),
+            num_elements: problem.mesh.elements.len(),
+            variant: format!("{:?}", problem.numerics.variant),
+            niftysim_timing: problem.numerics.niftysim_timing,
+            critical_time_step: report.critical_time_step,
+            stability: Some(report),
+            frames: 1,
+            energy: EnergySeries {
+                time: vec![time],
+                kinetic: vec![0.0],
+                strain: vec![strain],
+            },
+            saliva_elements: 0,
+            broken_saliva: Vec::new(),
+            newton_iterations: None,
+            residual_norm: None,
+            interrupted: None,
+            restarted_from: None,
+            shapes: Vec::new(),
+            export: None,
+        }
+    }
 }
 
 /// The step and time at which a run was interrupted.

@@ -861,61 +861,8 @@ fn threads_arg(s: &str) -> Result<usize, String> {
 }
 
 fn blend(input: &InputArgs, shapes: &[String], out: &Path) -> sticky_lips::Result<()> {
-    use sticky_lips::error::{Error, Location};
     let (p, _) = load(input)?;
-    let nn = p.mesh.nodes.len();
-    let mut fields = Vec::new();
-    for spec in shapes {
-        let (path, w) = sticky_lips::io::args::name_value(spec, "--shape", "PATH.vtu=WEIGHT")?;
-        let (v, comps, points) =
-            sticky_lips::io::vtu::read_point_data_f64(Path::new(path), "displacement")?;
-        if comps != 3 || points != nn {
-            return Err(Error::input(
-                path,
-                Location::None,
-                format!(
-                    "shape has {points} points x {comps} components; the model has {nn} nodes x 3"
-                ),
-            ));
-        }
-        if let Some(k) = v.iter().position(|x| !x.is_finite()) {
-            return Err(Error::input(
-                path,
-                Location::Field(format!("point data `displacement`, point {}", k / 3)),
-                format!("{} is not a finite number", v[k]),
-            ));
-        }
-        let b: Vec<[f64; 3]> = v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-        fields.push((w, b));
-    }
-    let refs: Vec<(f64, &[[f64; 3]])> = fields.iter().map(|(w, b)| (*w, b.as_slice())).collect();
-    let x = sticky_lips::blend::blend(&p.mesh.nodes, &refs);
-    let u: Vec<[f64; 3]> = x
-        .iter()
-        .zip(&p.mesh.nodes)
-        .map(|(a, b)| [a[0] - b[0], a[1] - b[1], a[2] - b[2]])
-        .collect();
-    let disc = Discretisation::new(&p);
-    let mut w = sticky_lips::io::output::FrameWriter::new(
-        out,
-        &p.mesh.nodes,
-        &p.mesh.elements,
-        &p.element_material,
-        &[],
-    )?;
-    w.frame(sticky_lips::io::output::Frame {
-        time: 0.0,
-        u: u.clone(),
-        volume_ratio: sticky_lips::tled::solver::volume_ratios(&disc, &u),
-        saliva: None,
-    })?;
-    let summary = serde_json::json!({
-        "input": p.source, "kind": "blend", "shapes": shapes, "steps": 0, "simulated_time": 0.0,
-        "wall_time": 0.0, "element_updates_per_second": 0.0, "precision": "f64", "threads": 1,
-        "critical_time_step": stability::analyse(&p, &disc).critical_time_step, "frames": 1,
-        "energy": {"time": [0.0], "kinetic": [0.0], "strain": [sticky_lips::tled::solver::strain_energy(&disc, &u)]},
-    });
-    w.finish(&summary)?;
+    app::blend::blend(&p, shapes, out)?;
     println!(
         "blend of {} shape(s) written to {}",
         shapes.len(),
@@ -925,7 +872,7 @@ fn blend(input: &InputArgs, shapes: &[String], out: &Path) -> sticky_lips::Resul
 }
 
 fn mouth(params: Option<&Path>, resolution: Option<f64>, out: &Path) -> sticky_lips::Result<()> {
-    use sticky_lips::error::{Error, Location};
+    use sticky_lips::error::Error;
     use sticky_lips::mesh::mouth;
     if let Some(path) = params {
         sticky_lips::io::atomic::refuse_overwriting_inputs(
@@ -935,17 +882,7 @@ fn mouth(params: Option<&Path>, resolution: Option<f64>, out: &Path) -> sticky_l
         )?;
     }
     let mut p: mouth::MouthParams = match params {
-        Some(path) => {
-            let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-            toml::from_str(&text).map_err(|e| {
-                let line = e.span().map(|r| text[..r.start].matches('\n').count() + 1);
-                Error::input(
-                    path.display().to_string(),
-                    line.map(Location::Line).unwrap_or(Location::None),
-                    e.message(),
-                )
-            })?
-        }
+        Some(path) => scenario::read_toml(path)?,
         None => mouth::MouthParams::default(),
     };
     if let Some(r) = resolution {

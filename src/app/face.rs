@@ -154,17 +154,7 @@ fn read_rig_and_params(a: &FaceJob) -> Result<(face::FaceRig, face::PrepareParam
         None => face::FaceRig::default(),
     };
     let params = match a.params {
-        Some(path) => {
-            let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-            toml::from_str(&text).map_err(|e| {
-                let line = e.span().map(|r| text[..r.start].matches('\n').count() + 1);
-                Error::input(
-                    path.display().to_string(),
-                    line.map(Location::Line).unwrap_or(Location::None),
-                    e.message(),
-                )
-            })?
-        }
+        Some(path) => scenario::read_toml(path)?,
         None => face::PrepareParams::default(),
     };
     Ok((rig, params))

@@ -569,8 +569,7 @@ pub fn read_text(path: &Path) -> Result<String> {
 /// override is a dotted key path (`"mesh.face.resolution"`, `"saliva.0.k_glue"`) and its
 /// new value; missing tables are created. Returns the new TOML text (comments are lost).
 pub fn with_overrides(text: &str, file: &str, overrides: &[(&str, toml::Value)]) -> Result<String> {
-    let doc: toml::Table = toml::from_str(text)
-        .map_err(|e| Error::input(file, line_of(text, e.span()), e.message()))?;
+    let doc: toml::Table = from_toml(text, file)?;
     let mut doc = toml::Value::Table(doc);
     for (key, value) in overrides {
         let parts: Vec<&str> = key.split('.').collect();
@@ -641,8 +640,7 @@ impl std::str::FromStr for DtChoice {
 /// decay (a `decay_per_step` of the old step becomes the `decay_time` it amounts to). For
 /// `--dt` on `run`, `paper` and `sweep`. Returns the new TOML text (comments are lost).
 pub fn with_dt(text: &str, file: &str, dt: DtChoice) -> Result<String> {
-    let mut doc: toml::Table = toml::from_str(text)
-        .map_err(|e| Error::input(file, line_of(text, e.span()), e.message()))?;
+    let mut doc: toml::Table = from_toml(text, file)?;
     let time = doc
         .get_mut("time")
         .and_then(|t| t.as_table_mut())
@@ -700,6 +698,18 @@ pub fn with_dt(text: &str, file: &str, dt: DtChoice) -> Result<String> {
         }
     }
     Ok(toml::to_string(&doc).expect("a TOML table serialises"))
+}
+
+/// `text`, the TOML file `file`, read as a `T`: the one reader of TOML whose errors name the
+/// file and the line (a scenario, a sweep's spec, `face --params`, `mouth --params`).
+pub fn from_toml<T: serde::de::DeserializeOwned>(text: &str, file: &str) -> Result<T> {
+    toml::from_str(text).map_err(|e| Error::input(file, line_of(text, e.span()), e.message()))
+}
+
+/// The TOML file `path` read as a `T` ([`from_toml`]; an I/O error names the file).
+pub fn read_toml<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    from_toml(&text, &path.display().to_string())
 }
 
 fn line_of(text: &str, span: Option<std::ops::Range<usize>>) -> Location {
