@@ -79,7 +79,7 @@ def main():
     out = os.path.abspath(a.out)
     os.makedirs(out, exist_ok=False)
     for k, c in enumerate(commands(out, a.head)):
-        r = subprocess.run([a.bin] + c, cwd=out, capture_output=True, text=True)
+        r = subprocess.run([os.path.abspath(a.bin)] + c, cwd=out, capture_output=True, text=True)
         if r.returncode != 0:
             sys.exit(f"{' '.join(c)} failed ({r.returncode}):\n{r.stderr}")
         text = re.sub(r"[0-9.eE+-]+ (s\b|element-updates/s)", r"<T> \1", r.stdout.replace(out, "<OUT>"))

@@ -81,58 +81,61 @@ struct InputArgs {
     niftysim_compat: bool,
 }
 
+#[derive(clap::Args)]
+struct RunArgs {
+    /// A scenario (.toml) or a NiftySim model (.xml); with --restart, the checkpoint's
+    /// input when not given; else the default job: the sticky lips opening on the
+    /// MakeHuman face (Table 1 at the quick resolution), written to out/face.
+    input: Option<PathBuf>,
+    /// Reproduce NiftySim: centroid gradients and its timing quirks (XML input only).
+    #[arg(long)]
+    niftysim_compat: bool,
+    /// Output directory (default: the scenario's [output] dir, else out/<input name>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Write the run's full state to OUT/checkpoint.bin every N steps (CPU backend),
+    /// so that `--restart` can continue it; removed when the run completes.
+    #[arg(long, value_name = "N", value_parser = steps_arg)]
+    checkpoint_every: Option<usize>,
+    /// Continue the run in DIR from its checkpoint: the frames after the checkpoint are
+    /// written again, bit-identical to an uninterrupted run's.
+    #[arg(long, value_name = "DIR")]
+    restart: Option<PathBuf>,
+    #[arg(long, value_enum, default_value = "f64")]
+    precision: PrecisionArg,
+    /// Where the steps run (the GPU runs f32 everywhere, f64 where the adapter has SHADER_F64).
+    #[arg(long, value_enum, default_value = "cpu")]
+    backend: BackendArg,
+    /// Worker threads (default: every core; results are bit-identical for any count).
+    #[arg(long, value_parser = threads_arg)]
+    threads: Option<usize>,
+    /// Run even if the time step exceeds the critical time step.
+    #[arg(long)]
+    force_dt: bool,
+    /// The time step: `auto` (0.8 of the model's critical step, a whole number of steps
+    /// per frame) or seconds; the frames' interval and eq. 11's decay stay in physical
+    /// time. Default: the scenario's (the default job's is `auto`).
+    #[arg(long, value_name = "auto|SECONDS")]
+    dt: Option<scenario::DtChoice>,
+    /// Substeps of the saliva layer per step (scenarios only; `[time] subcycles`): `auto`
+    /// (as many as the saliva's critical step needs; with `--dt auto` the step is then set
+    /// by the tissue's) or a count (1: single rate).
+    #[arg(long, value_name = "auto|COUNT")]
+    subcycles: Option<app::input::Subcycles>,
+    /// No progress output (the same as `--progress none`).
+    #[arg(long, conflicts_with = "progress")]
+    quiet: bool,
+    /// What is printed while stepping: a bar (default on a terminal), a plain line every
+    /// 10 % (default otherwise), one JSON object per line on stdout (for programs that
+    /// drive the CLI), or nothing.
+    #[arg(long, value_enum, value_name = "bar|plain|json|none")]
+    progress: Option<Progress>,
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Explicit dynamic run (TLED, central differences).
-    Run {
-        /// A scenario (.toml) or a NiftySim model (.xml); with --restart, the checkpoint's
-        /// input when not given; else the default job: the sticky lips opening on the
-        /// MakeHuman face (Table 1 at the quick resolution), written to out/face.
-        input: Option<PathBuf>,
-        /// Reproduce NiftySim: centroid gradients and its timing quirks (XML input only).
-        #[arg(long)]
-        niftysim_compat: bool,
-        /// Output directory (default: the scenario's [output] dir, else out/<input name>).
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Write the run's full state to OUT/checkpoint.bin every N steps (CPU backend),
-        /// so that `--restart` can continue it; removed when the run completes.
-        #[arg(long, value_name = "N", value_parser = steps_arg)]
-        checkpoint_every: Option<usize>,
-        /// Continue the run in DIR from its checkpoint: the frames after the checkpoint are
-        /// written again, bit-identical to an uninterrupted run's.
-        #[arg(long, value_name = "DIR")]
-        restart: Option<PathBuf>,
-        #[arg(long, value_enum, default_value = "f64")]
-        precision: PrecisionArg,
-        /// Where the steps run (the GPU runs f32 everywhere, f64 where the adapter has SHADER_F64).
-        #[arg(long, value_enum, default_value = "cpu")]
-        backend: BackendArg,
-        /// Worker threads (default: every core; results are bit-identical for any count).
-        #[arg(long, value_parser = threads_arg)]
-        threads: Option<usize>,
-        /// Run even if the time step exceeds the critical time step.
-        #[arg(long)]
-        force_dt: bool,
-        /// The time step: `auto` (0.8 of the model's critical step, a whole number of steps
-        /// per frame) or seconds; the frames' interval and eq. 11's decay stay in physical
-        /// time. Default: the scenario's (the default job's is `auto`).
-        #[arg(long, value_name = "auto|SECONDS")]
-        dt: Option<scenario::DtChoice>,
-        /// Substeps of the saliva layer per step (scenarios only; `[time] subcycles`): `auto`
-        /// (as many as the saliva's critical step needs; with `--dt auto` the step is then set
-        /// by the tissue's) or a count (1: single rate).
-        #[arg(long, value_name = "auto|COUNT")]
-        subcycles: Option<app::input::Subcycles>,
-        /// No progress output (the same as `--progress none`).
-        #[arg(long, conflicts_with = "progress")]
-        quiet: bool,
-        /// What is printed while stepping: a bar (default on a terminal), a plain line every
-        /// 10 % (default otherwise), one JSON object per line on stdout (for programs that
-        /// drive the CLI), or nothing.
-        #[arg(long, value_enum, value_name = "bar|plain|json|none")]
-        progress: Option<Progress>,
-    },
+    Run(RunArgs),
     /// Static equilibrium (Newton with load stepping) at the end-of-run loads.
     Equilibrium {
         #[command(flatten)]
@@ -393,118 +396,7 @@ fn main() -> ExitCode {
 
 fn real_main(cli: Cli) -> sticky_lips::Result<()> {
     match cli.command {
-        Command::Run {
-            input,
-            niftysim_compat,
-            out,
-            checkpoint_every,
-            restart,
-            precision,
-            backend,
-            threads,
-            force_dt,
-            dt,
-            subcycles,
-            quiet,
-            progress,
-        } => {
-            let default = input.is_none() && restart.is_none();
-            let input = InputArgs {
-                input: match (input, &restart) {
-                    (Some(i), _) => i,
-                    (None, Some(dir)) => {
-                        sticky_lips::run_dir::RunDir::new(dir).checkpoint_input()?
-                    }
-                    (None, None) => default_job(out.as_deref(), dt)?,
-                },
-                niftysim_compat,
-            };
-            // the default job's scenario already has the step asked for
-            let (p, default_out) =
-                app::input::load_with(&input.input(), if default { None } else { dt }, subcycles)?;
-            let out = match (&restart, out) {
-                (Some(dir), Some(o)) if o != *dir => {
-                    return Err(sticky_lips::Error::input(
-                        "--out",
-                        sticky_lips::error::Location::None,
-                        format!(
-                            "--restart {} continues the run in that directory; --out {} differs",
-                            dir.display(),
-                            o.display()
-                        ),
-                    ))
-                }
-                (Some(dir), _) => dir.clone(),
-                (None, o) => app::input::out_dir(o, default_out, &input.input),
-            };
-            let progress = match (quiet, progress) {
-                (true, _) => Progress::None,
-                (false, Some(p)) => p,
-                (false, None) => Progress::default_for_stderr(),
-            };
-            let opts = RunOptions {
-                out: out.clone(),
-                precision: precision.precision(),
-                backend: backend.backend(),
-                threads: all_cores(threads),
-                force_dt,
-                cancel: progress::cancel_token(),
-                progress: progress.callback(),
-                checkpoint_every,
-                restart: restart.is_some(),
-                export: true,
-            };
-            let json = progress == Progress::Json;
-            let s = match driver::run(&p, &opts) {
-                Err(sticky_lips::Error::Interrupted { step, time }) if json => {
-                    progress::json_line(&serde_json::json!({
-                        "event": "interrupted", "step": step, "time": time, "out": out,
-                    }));
-                    return Err(sticky_lips::Error::Interrupted { step, time });
-                }
-                r => r?,
-            };
-            if json {
-                if s.export.is_some() {
-                    app::preview::write(&p, &out)?;
-                }
-                progress::json_line(&serde_json::json!({
-                    "event": "finished",
-                    "out": out,
-                    "steps": s.steps,
-                    "simulated_time": s.simulated_time,
-                    "frames": s.frames,
-                    "wall_time": s.wall_time,
-                }));
-                return Ok(());
-            }
-            println!(
-                "{}: {} steps, t = {:.6} s, {} frames in {}; wall {:.3} s, {:.3e} element-updates/s ({}, {}, {} thread{})",
-                p.source,
-                s.steps,
-                s.simulated_time,
-                s.frames,
-                out.display(),
-                s.wall_time,
-                s.element_updates_per_second,
-                s.precision,
-                s.backend,
-                s.threads,
-                if s.threads == 1 { "" } else { "s" }
-            );
-            if let Some(e) = &s.export {
-                let t = std::time::Instant::now();
-                app::preview::write(&p, &out)?;
-                println!(
-                    "{}: skin.obj, skin.pc2, skin.mdd, skin.usda ({} frames of {} vertices; {:.2} s) and preview.png, preview_sheet.png ({:.2} s)",
-                    out.display(),
-                    e.frames,
-                    e.vertices,
-                    e.read_seconds + e.write_seconds,
-                    t.elapsed().as_secs_f64()
-                );
-            }
-        }
+        Command::Run(a) => run(a)?,
         Command::Equilibrium {
             input,
             out,
@@ -560,57 +452,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             run_dir,
             scenario,
             skin_map,
-        } => {
-            let input = InputArgs {
-                input: match scenario {
-                    Some(s) => s,
-                    None => sticky_lips::run_dir::RunDir::new(&run_dir).input()?,
-                },
-                niftysim_compat: false,
-            };
-            let (p, _) = load(&input)?;
-            let Some(skin) = &p.physics.skin else {
-                return Err(sticky_lips::Error::input(
-                    input.input.display().to_string(),
-                    sticky_lips::error::Location::Field("mesh.generator".into()),
-                    "only mouth and face models have a skin to export",
-                ));
-            };
-            if let Some(path) = skin_map {
-                // the map is a new file: never one of the run's files or the scenario
-                let mut inputs: Vec<PathBuf> = std::fs::read_dir(&run_dir)
-                    .map_err(|e| sticky_lips::Error::io(&run_dir, e))?
-                    .filter_map(|e| e.ok().map(|e| e.path()))
-                    .collect();
-                inputs.push(input.input.clone());
-                let named: Vec<(&Path, &str)> = inputs
-                    .iter()
-                    .map(|p| (p.as_path(), "a file of the run or its scenario"))
-                    .collect();
-                let (dir, name) = (
-                    path.parent().unwrap_or(Path::new(".")),
-                    path.file_name().and_then(|n| n.to_str()).unwrap_or(""),
-                );
-                sticky_lips::io::atomic::refuse_overwriting_inputs(dir, &[name], &named)?;
-                let map = sticky_lips::export::skin_map(skin, &run_dir)?;
-                let text = serde_json::to_string(&map).expect("json");
-                sticky_lips::io::atomic::write_atomic(&path, text.as_bytes())
-                    .map_err(|e| sticky_lips::Error::io(&path, e))?;
-                println!("export: the skin mapping written to {}", path.display());
-                return Ok(());
-            }
-            let e = sticky_lips::export::export_with(skin, &run_dir, &progress::cancel_token())?;
-            app::preview::write(&p, &run_dir)?;
-            println!(
-                "export: {} frames of {} vertices ({} over the model, {} beside it, {} following the jaw) to {}",
-                e.frames,
-                e.vertices,
-                e.tied[0],
-                e.tied[1],
-                e.tied[2],
-                run_dir.display()
-            );
-        }
+        } => export(&run_dir, scenario, skin_map)?,
         Command::Paper {
             out,
             quick,
@@ -691,70 +533,7 @@ fn real_main(cli: Cli) -> sticky_lips::Result<()> {
             direction,
             out,
         } => extrude(&surface, thickness, &groups, direction.as_deref(), &out)?,
-        Command::Check { input } => {
-            let (p, _) = load(&input)?;
-            let st = p.mesh.stats();
-            let d = Discretisation::new(&p);
-            let r = stability::analyse(&p, &d);
-            println!("{}: valid", p.source);
-            println!(
-                "  nodes {}, hexahedra {}, materials {}",
-                st.nodes,
-                st.elements,
-                p.materials.len()
-            );
-            println!(
-                "  bounding box {:?} .. {:?} m",
-                st.bounding_box_min, st.bounding_box_max
-            );
-            println!(
-                "  volume {:.6e} m^3 (elements {:.3e} .. {:.3e}), worst corner-Jacobian ratio {:.3}",
-                st.total_volume, st.min_element_volume, st.max_element_volume, st.worst_jacobian_ratio
-            );
-            println!(
-                "  variant {:?}, damping {} 1/s, hourglass kappa {}",
-                p.numerics.variant, p.numerics.damping, p.numerics.hourglass_kappa
-            );
-            println!(
-                "  steps {} of dt = {:e} s (T = {} s), output every {} steps",
-                p.num_steps(),
-                p.time.dt,
-                p.time.total_time,
-                p.time.output_every
-            );
-            println!(
-                "  critical time step 2/omega_max = {:.4e} s ({} Lanczos iterations); per-element estimate {:.4e} s at element {}",
-                r.critical_time_step, r.iterations, r.element_estimate, r.limiting_element
-            );
-            if let Some(t) = r.tissue_critical_time_step {
-                println!(
-                    "  critical time step of the tissue (the saliva's stiffness left out, the limit of a subcycled step) = {t:.4e} s"
-                );
-            }
-            let k = p.numerics.subcycles;
-            let judge = |what: &str, dt: f64, critical: f64| {
-                let ratio = dt / critical;
-                if ratio <= 1.0 {
-                    println!("  {what} is stable ({:.1} % of critical)", 100.0 * ratio);
-                } else {
-                    println!(
-                        "  {what} is UNSTABLE ({:.1} % of critical): `run` will refuse it",
-                        100.0 * ratio
-                    );
-                }
-            };
-            if k > 1 {
-                let tissue = r.tissue_critical_time_step.unwrap_or(f64::INFINITY);
-                judge(
-                    &format!("the saliva's substep dt/{k} = {:e} s", p.time.dt / k as f64),
-                    p.time.dt / k as f64,
-                    r.critical_time_step,
-                );
-                judge("the large step (against the tissue's)", p.time.dt, tissue);
-            } else {
-                judge("time step", p.time.dt, r.critical_time_step);
-            }
-        }
+        Command::Check { input } => check(&input)?,
     }
     Ok(())
 }
@@ -830,6 +609,247 @@ fn steps_arg(s: &str) -> Result<usize, String> {
 /// `sticky-lips run` without an input: the sticky lips opening on the MakeHuman face (the
 /// paper's `fig4_sticky` run at `--quick` resolution: Table 1, the wide jaw opening), its
 /// scenario written to `OUT/scenario.toml` (OUT: `--out`, else `out/face`) and run from there.
+/// `sticky-lips run`: a run of an input, the default job, or a restart; the animation files
+/// and the preview after it where the model has a skin.
+fn run(a: RunArgs) -> sticky_lips::Result<()> {
+    let RunArgs {
+        input,
+        niftysim_compat,
+        out,
+        checkpoint_every,
+        restart,
+        precision,
+        backend,
+        threads,
+        force_dt,
+        dt,
+        subcycles,
+        quiet,
+        progress,
+    } = a;
+    let default = input.is_none() && restart.is_none();
+    let input = InputArgs {
+        input: match (input, &restart) {
+            (Some(i), _) => i,
+            (None, Some(dir)) => sticky_lips::run_dir::RunDir::new(dir).checkpoint_input()?,
+            (None, None) => default_job(out.as_deref(), dt)?,
+        },
+        niftysim_compat,
+    };
+    // the default job's scenario already has the step asked for
+    let (p, default_out) =
+        app::input::load_with(&input.input(), if default { None } else { dt }, subcycles)?;
+    let out = match (&restart, out) {
+        (Some(dir), Some(o)) if o != *dir => {
+            return Err(sticky_lips::Error::input(
+                "--out",
+                sticky_lips::error::Location::None,
+                format!(
+                    "--restart {} continues the run in that directory; --out {} differs",
+                    dir.display(),
+                    o.display()
+                ),
+            ))
+        }
+        (Some(dir), _) => dir.clone(),
+        (None, o) => app::input::out_dir(o, default_out, &input.input),
+    };
+    let progress = match (quiet, progress) {
+        (true, _) => Progress::None,
+        (false, Some(p)) => p,
+        (false, None) => Progress::default_for_stderr(),
+    };
+    let opts = RunOptions {
+        out: out.clone(),
+        precision: precision.precision(),
+        backend: backend.backend(),
+        threads: all_cores(threads),
+        force_dt,
+        cancel: progress::cancel_token(),
+        progress: progress.callback(),
+        checkpoint_every,
+        restart: restart.is_some(),
+        export: true,
+    };
+    let json = progress == Progress::Json;
+    let s = match driver::run(&p, &opts) {
+        Err(sticky_lips::Error::Interrupted { step, time }) if json => {
+            progress::json_line(&serde_json::json!({
+                "event": "interrupted", "step": step, "time": time, "out": out,
+            }));
+            return Err(sticky_lips::Error::Interrupted { step, time });
+        }
+        r => r?,
+    };
+    if json {
+        if s.export.is_some() {
+            app::preview::write(&p, &out)?;
+        }
+        progress::json_line(&serde_json::json!({
+            "event": "finished",
+            "out": out,
+            "steps": s.steps,
+            "simulated_time": s.simulated_time,
+            "frames": s.frames,
+            "wall_time": s.wall_time,
+        }));
+        return Ok(());
+    }
+    println!(
+        "{}: {} steps, t = {:.6} s, {} frames in {}; wall {:.3} s, {:.3e} element-updates/s ({}, {}, {} thread{})",
+        p.source,
+        s.steps,
+        s.simulated_time,
+        s.frames,
+        out.display(),
+        s.wall_time,
+        s.element_updates_per_second,
+        s.precision,
+        s.backend,
+        s.threads,
+        if s.threads == 1 { "" } else { "s" }
+    );
+    if let Some(e) = &s.export {
+        let t = std::time::Instant::now();
+        app::preview::write(&p, &out)?;
+        println!(
+            "{}: skin.obj, skin.pc2, skin.mdd, skin.usda ({} frames of {} vertices; {:.2} s) and preview.png, preview_sheet.png ({:.2} s)",
+            out.display(),
+            e.frames,
+            e.vertices,
+            e.read_seconds + e.write_seconds,
+            t.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+/// `sticky-lips export`: a run's animation files and preview written again from its frames,
+/// or only its skin mapping (`--skin-map`).
+fn export(
+    run_dir: &Path,
+    scenario: Option<PathBuf>,
+    skin_map: Option<PathBuf>,
+) -> sticky_lips::Result<()> {
+    let input = InputArgs {
+        input: match scenario {
+            Some(s) => s,
+            None => sticky_lips::run_dir::RunDir::new(&run_dir).input()?,
+        },
+        niftysim_compat: false,
+    };
+    let (p, _) = load(&input)?;
+    let Some(skin) = &p.physics.skin else {
+        return Err(sticky_lips::Error::input(
+            input.input.display().to_string(),
+            sticky_lips::error::Location::Field("mesh.generator".into()),
+            "only mouth and face models have a skin to export",
+        ));
+    };
+    if let Some(path) = skin_map {
+        // the map is a new file: never one of the run's files or the scenario
+        let mut inputs: Vec<PathBuf> = std::fs::read_dir(&run_dir)
+            .map_err(|e| sticky_lips::Error::io(&run_dir, e))?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .collect();
+        inputs.push(input.input.clone());
+        let named: Vec<(&Path, &str)> = inputs
+            .iter()
+            .map(|p| (p.as_path(), "a file of the run or its scenario"))
+            .collect();
+        let (dir, name) = (
+            path.parent().unwrap_or(Path::new(".")),
+            path.file_name().and_then(|n| n.to_str()).unwrap_or(""),
+        );
+        sticky_lips::io::atomic::refuse_overwriting_inputs(dir, &[name], &named)?;
+        let map = sticky_lips::export::skin_map(skin, &run_dir)?;
+        let text = serde_json::to_string(&map).expect("json");
+        sticky_lips::io::atomic::write_atomic(&path, text.as_bytes())
+            .map_err(|e| sticky_lips::Error::io(&path, e))?;
+        println!("export: the skin mapping written to {}", path.display());
+        return Ok(());
+    }
+    let e = sticky_lips::export::export_with(skin, &run_dir, &progress::cancel_token())?;
+    app::preview::write(&p, &run_dir)?;
+    println!(
+        "export: {} frames of {} vertices ({} over the model, {} beside it, {} following the jaw) to {}",
+        e.frames,
+        e.vertices,
+        e.tied[0],
+        e.tied[1],
+        e.tied[2],
+        run_dir.display()
+    );
+    Ok(())
+}
+
+/// `sticky-lips check`: an input's mesh statistics, time step and stability limits.
+fn check(input: &InputArgs) -> sticky_lips::Result<()> {
+    let (p, _) = load(&input)?;
+    let st = p.mesh.stats();
+    let d = Discretisation::new(&p);
+    let r = stability::analyse(&p, &d);
+    println!("{}: valid", p.source);
+    println!(
+        "  nodes {}, hexahedra {}, materials {}",
+        st.nodes,
+        st.elements,
+        p.materials.len()
+    );
+    println!(
+        "  bounding box {:?} .. {:?} m",
+        st.bounding_box_min, st.bounding_box_max
+    );
+    println!(
+        "  volume {:.6e} m^3 (elements {:.3e} .. {:.3e}), worst corner-Jacobian ratio {:.3}",
+        st.total_volume, st.min_element_volume, st.max_element_volume, st.worst_jacobian_ratio
+    );
+    println!(
+        "  variant {:?}, damping {} 1/s, hourglass kappa {}",
+        p.numerics.variant, p.numerics.damping, p.numerics.hourglass_kappa
+    );
+    println!(
+        "  steps {} of dt = {:e} s (T = {} s), output every {} steps",
+        p.num_steps(),
+        p.time.dt,
+        p.time.total_time,
+        p.time.output_every
+    );
+    println!(
+        "  critical time step 2/omega_max = {:.4e} s ({} Lanczos iterations); per-element estimate {:.4e} s at element {}",
+        r.critical_time_step, r.iterations, r.element_estimate, r.limiting_element
+    );
+    if let Some(t) = r.tissue_critical_time_step {
+        println!(
+            "  critical time step of the tissue (the saliva's stiffness left out, the limit of a subcycled step) = {t:.4e} s"
+        );
+    }
+    let k = p.numerics.subcycles;
+    let judge = |what: &str, dt: f64, critical: f64| {
+        let ratio = dt / critical;
+        if ratio <= 1.0 {
+            println!("  {what} is stable ({:.1} % of critical)", 100.0 * ratio);
+        } else {
+            println!(
+                "  {what} is UNSTABLE ({:.1} % of critical): `run` will refuse it",
+                100.0 * ratio
+            );
+        }
+    };
+    if k > 1 {
+        let tissue = r.tissue_critical_time_step.unwrap_or(f64::INFINITY);
+        judge(
+            &format!("the saliva's substep dt/{k} = {:e} s", p.time.dt / k as f64),
+            p.time.dt / k as f64,
+            r.critical_time_step,
+        );
+        judge("the large step (against the tissue's)", p.time.dt, tissue);
+    } else {
+        judge("time step", p.time.dt, r.critical_time_step);
+    }
+    Ok(())
+}
+
 fn all_cores(threads: Option<usize>) -> usize {
     threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
 }

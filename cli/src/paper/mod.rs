@@ -68,6 +68,56 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
     let t_all = Instant::now();
     let out = &opts.out;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    let (selected, needed) = selection(opts)?;
+    let done = make_runs(opts, &needed)?;
+    let (face_mask, lips_mask) = look::makehuman_masks();
+    let skin = match (opts.model, &face_mask, &lips_mask) {
+        (Model::Face, Some(f), Some(l)) => Some(look::face_skin(f, l)),
+        _ => None,
+    };
+    let ctx = Context {
+        opts,
+        runs: &done,
+        choice: opts.model.choice(),
+        lips_mask,
+        skin,
+    };
+    let (written, per_figure) = draw_figures(&ctx, &selected)?;
+    let claims = claims_of(&done)?;
+    if let Some(s) = done.get("fig4_sticky") {
+        write_table1(opts, &ctx, s)?;
+    }
+    let m = json!({
+        "model": opts.model.name(),
+        "quick": opts.quick,
+        "only": if opts.only.is_empty() { Value::Null } else { json!(opts.only) },
+        "reused_runs": opts.reuse,
+        "choice": ctx.choice,
+        "threads": opts.threads,
+        "wall_time_s": t_all.elapsed().as_secs_f64(),
+        "figures": written,
+        "claims": claims,
+        "measured": per_figure,
+        "runs": runs_json(&done),
+    });
+    let mpath = out.join("measured.json");
+    sticky_lips::io::atomic::write_atomic(
+        &mpath,
+        serde_json::to_string_pretty(&m).expect("json").as_bytes(),
+    )
+    .map_err(|e| Error::io(&mpath, e))?;
+    eprintln!(
+        "paper: {} figures, table1.md and measured.json written to {} in {:.1} s",
+        written.len(),
+        out.display(),
+        t_all.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// The figures asked for (`--only`, else all) and the runs they need (with the claims' runs
+/// for a full set), in the paper's order.
+fn selection(opts: &PaperOptions) -> Result<(Vec<&'static figures::Figure>, Vec<String>)> {
     let known: Vec<&str> = figures::TABLE.iter().map(|f| f.name).collect();
     for o in &opts.only {
         if !known.contains(&o.as_str()) {
@@ -98,6 +148,11 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
             }
         }
     }
+    Ok((selected, needed))
+}
+
+/// The runs named in `needed`, made (or reused) in the paper's order.
+fn make_runs(opts: &PaperOptions, needed: &[String]) -> Result<BTreeMap<String, runs::Run>> {
     let all = runs::all(opts.model, opts.quick);
     let mut done: BTreeMap<String, runs::Run> = BTreeMap::new();
     for spec in all.iter().filter(|s| needed.contains(&s.name)) {
@@ -112,21 +167,18 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
         let r = runs::run(opts, spec)?;
         done.insert(spec.name.clone(), r);
     }
-    let (face_mask, lips_mask) = look::makehuman_masks();
-    let skin = match (opts.model, &face_mask, &lips_mask) {
-        (Model::Face, Some(f), Some(l)) => Some(look::face_skin(f, l)),
-        _ => None,
-    };
-    let ctx = Context {
-        opts,
-        runs: &done,
-        choice: opts.model.choice(),
-        lips_mask,
-        skin,
-    };
+    Ok(done)
+}
+
+/// Draws the `selected` figures: the files written and each figure's measured numbers.
+fn draw_figures(
+    ctx: &Context,
+    selected: &[&figures::Figure],
+) -> Result<(Vec<String>, serde_json::Map<String, Value>)> {
+    let out = &ctx.opts.out;
     let mut written = Vec::new();
     let mut per_figure = serde_json::Map::new();
-    for f in &selected {
+    for f in selected {
         crate::progress::cancel_token().check(|| {
             format!(
                 "paper stopped before figure {} (the runs are complete; `paper --reuse` draws the figures from them)",
@@ -153,7 +205,12 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
         per_figure.insert(f.name.into(), o.measured);
     }
 
-    // the claims, from the runs that carry them
+    Ok((written, per_figure))
+}
+
+/// The paper's claims (`sticky_lips::claims`), where the four runs that carry them were made;
+/// each printed with its verdict.
+fn claims_of(done: &BTreeMap<String, runs::Run>) -> Result<Vec<sticky_lips::claims::Claim>> {
     let claims: Vec<sticky_lips::claims::Claim> =
         if ["fig4_dry", "fig4_sticky", "fig7_dry", "fig7_sticky"]
             .iter()
@@ -185,47 +242,54 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
         );
     }
 
-    // Table 1 as used
-    if let Some(s) = done.get("fig4_sticky") {
-        let p = &s.problem;
-        let (tissue, saliva) = (&p.materials[0], &p.materials[1]);
-        let sp = &p.physics.saliva[0].params;
-        let table = format!(
-            "# Table 1 as used\n\n`paper/scenarios/table1.toml` ({}{}); the runs change only their overrides \
-             (`OUT/runs/NAME/scenario.toml`).\n\n| property | value |\n|---|---|\n\
-             | time step | {} s |\n| total time simulated | {} s |\n| hourglass coefficient | {} |\n| damping coefficient | {} 1/s |\n\
-             | soft tissue | neo-Hookean, mu = {} Pa, K = {} Pa, rho = {} kg/m^3 |\n| saliva | neo-Hookean breaking, mu = {} Pa, K = {} Pa, rho = {} kg/m^3 |\n\
-             | initial moisture 0M | {:?} um |\n| critical moisture Mc | {} um |\n| evaporation rate | {:?} um/s |\n\
-             | max glue strength K_glue | {} (chosen: paper/README.md) |\n| force decay of a broken element | {:?} (eq. 11) |\n\
-             | jaw | {} rad wide, {} rad slight, smooth step over 0.5 s |\n| mesh | {} hexahedra, {} nodes |\n",
-            opts.model.name(),
-            if opts.quick { ", --quick: coarse model, shorter run" } else { "" },
-            p.time.dt,
-            p.time.total_time,
-            p.numerics.hourglass_kappa,
-            p.numerics.damping,
-            tissue.law.mu,
-            tissue.law.bulk,
-            tissue.density,
-            saliva.law.mu,
-            saliva.law.bulk,
-            saliva.density,
-            sp.initial_moisture,
-            sp.critical_moisture,
-            sp.evaporation.rates,
-            sp.k_glue,
-            sp.decay,
-            ctx.choice.wide_angle,
-            ctx.choice.slight_angle,
-            p.mesh.elements.len(),
-            p.mesh.nodes.len()
-        );
-        let tpath = out.join("table1.md");
-        sticky_lips::io::atomic::write_atomic(&tpath, table.as_bytes())
-            .map_err(|e| Error::io(&tpath, e))?;
-    }
+    Ok(claims)
+}
 
-    let runs_json: Vec<Value> = done
+/// `table1.md`: Table 1 as the run `s` used it.
+fn write_table1(opts: &PaperOptions, ctx: &Context, s: &runs::Run) -> Result<()> {
+    let out = &opts.out;
+    let p = &s.problem;
+    let (tissue, saliva) = (&p.materials[0], &p.materials[1]);
+    let sp = &p.physics.saliva[0].params;
+    let table = format!(
+        "# Table 1 as used\n\n`paper/scenarios/table1.toml` ({}{}); the runs change only their overrides \
+         (`OUT/runs/NAME/scenario.toml`).\n\n| property | value |\n|---|---|\n\
+         | time step | {} s |\n| total time simulated | {} s |\n| hourglass coefficient | {} |\n| damping coefficient | {} 1/s |\n\
+         | soft tissue | neo-Hookean, mu = {} Pa, K = {} Pa, rho = {} kg/m^3 |\n| saliva | neo-Hookean breaking, mu = {} Pa, K = {} Pa, rho = {} kg/m^3 |\n\
+         | initial moisture 0M | {:?} um |\n| critical moisture Mc | {} um |\n| evaporation rate | {:?} um/s |\n\
+         | max glue strength K_glue | {} (chosen: paper/README.md) |\n| force decay of a broken element | {:?} (eq. 11) |\n\
+         | jaw | {} rad wide, {} rad slight, smooth step over 0.5 s |\n| mesh | {} hexahedra, {} nodes |\n",
+        opts.model.name(),
+        if opts.quick { ", --quick: coarse model, shorter run" } else { "" },
+        p.time.dt,
+        p.time.total_time,
+        p.numerics.hourglass_kappa,
+        p.numerics.damping,
+        tissue.law.mu,
+        tissue.law.bulk,
+        tissue.density,
+        saliva.law.mu,
+        saliva.law.bulk,
+        saliva.density,
+        sp.initial_moisture,
+        sp.critical_moisture,
+        sp.evaporation.rates,
+        sp.k_glue,
+        sp.decay,
+        ctx.choice.wide_angle,
+        ctx.choice.slight_angle,
+        p.mesh.elements.len(),
+        p.mesh.nodes.len()
+    );
+    let tpath = out.join("table1.md");
+    sticky_lips::io::atomic::write_atomic(&tpath, table.as_bytes())
+        .map_err(|e| Error::io(&tpath, e))?;
+    Ok(())
+}
+
+/// `measured.json`'s `runs`: each run's size, time and zip front.
+fn runs_json(done: &BTreeMap<String, runs::Run>) -> Vec<Value> {
+    done
         .values()
         .map(|r| {
             let last = r.measures.frames.last();
@@ -253,31 +317,5 @@ pub fn paper(opts: &PaperOptions) -> Result<()> {
                 "saliva_elements": r.summary.saliva_elements,
             })
         })
-        .collect();
-    let m = json!({
-        "model": opts.model.name(),
-        "quick": opts.quick,
-        "only": if opts.only.is_empty() { Value::Null } else { json!(opts.only) },
-        "reused_runs": opts.reuse,
-        "choice": ctx.choice,
-        "threads": opts.threads,
-        "wall_time_s": t_all.elapsed().as_secs_f64(),
-        "figures": written,
-        "claims": claims,
-        "measured": per_figure,
-        "runs": runs_json,
-    });
-    let mpath = out.join("measured.json");
-    sticky_lips::io::atomic::write_atomic(
-        &mpath,
-        serde_json::to_string_pretty(&m).expect("json").as_bytes(),
-    )
-    .map_err(|e| Error::io(&mpath, e))?;
-    eprintln!(
-        "paper: {} figures, table1.md and measured.json written to {} in {:.1} s",
-        written.len(),
-        out.display(),
-        t_all.elapsed().as_secs_f64()
-    );
-    Ok(())
+        .collect()
 }
