@@ -65,37 +65,7 @@ pub fn produce(ctx: &Context) -> Result<Output> {
         .step_by(step)
         .map(|i| from + i as f64 * FRAME)
         .collect();
-    let mut panels = Vec::new();
-    for &(t0, _) in &windows {
-        for &t in &times {
-            panels.push(picture(
-                run,
-                ctx.skin.as_ref(),
-                run.frame_at(t0 + t),
-                360,
-                220,
-            )?);
-        }
-    }
-    let titles: Vec<String> = times
-        .iter()
-        .map(|t| format!("{:.2} s after the jaw opens", t))
-        .collect();
-    let ct: Vec<&str> = titles.iter().map(|s| s.as_str()).collect();
-    let rows = [
-        format!("first opening ({} s)", windows[0].0),
-        format!("second opening ({} s)", windows[1].0),
-    ];
-    let rt: Vec<&str> = rows.iter().map(|s| s.as_str()).collect();
-    let labels = GridLabels {
-        title: Some(
-            "Lips that stick again: the jaw opens, closes, holds the lips closed, opens again",
-        ),
-        column_titles: &ct,
-        row_titles: &rt,
-        ..Default::default()
-    };
-    let grid = Image::grid_labelled(&panels, times.len(), 8, WHITE, &labels);
+    let grid = restick_grid(ctx, run, &windows, &times)?;
 
     // broken saliva over time and when it re-bonds against when the lips touch
     let p = &run.problem;
@@ -105,33 +75,7 @@ pub fn produce(ctx: &Context) -> Result<Output> {
         .filter(|&&mat| p.physics.saliva.iter().any(|s| s.material == mat))
         .count()
         .max(1);
-    let top = PLOSIVE_JAW.iter().fold(0.0f64, |a, k| a.max(k[1]));
-    let mut spec = PlotSpec::new(
-        "Lips that stick again: broken saliva and the open mouth width",
-        "time (s)",
-        "fraction",
-    );
-    spec.series = vec![
-        Series::new(
-            format!("broken saliva elements (of {n_saliva})"),
-            run.series(&|f| f.broken as f64 / n_saliva as f64),
-        )
-        .colour(RED),
-        Series::new(
-            "open fraction of the mouth width",
-            run.series(&|f| f.open_fraction),
-        )
-        .colour(GREEN)
-        .dashed(),
-        Series::new(
-            format!("jaw angle / {top} rad"),
-            PLOSIVE_JAW.iter().map(|k| (k[0], k[1] / top)).collect(),
-        )
-        .colour([120, 120, 120]),
-    ];
-    // room above the curves for the legend
-    spec.y_range = Some((0.0, 1.4));
-    spec.legend = LegendPosition::UpperRight;
+    let spec = restick_plot(run, n_saliva);
     let closing = |f: &&sticky_lips::measures::FrameMeasures| f.time > k(2) && f.time <= k(4);
     let all_broken_until = m
         .frames
@@ -175,4 +119,82 @@ pub fn produce(ctx: &Context) -> Result<Output> {
                 .map(|f| f.broken),
         }),
     })
+}
+
+/// The panels: the frames `times` after each opening's start (a row per window).
+fn restick_grid(
+    ctx: &Context,
+    run: &crate::paper::runs::Run,
+    windows: &[(f64, f64)],
+    times: &[f64],
+) -> Result<Image> {
+    let mut panels = Vec::new();
+    for &(t0, _) in windows {
+        for &t in times {
+            panels.push(picture(
+                run,
+                ctx.skin.as_ref(),
+                run.frame_at(t0 + t),
+                360,
+                220,
+            )?);
+        }
+    }
+    let titles: Vec<String> = times
+        .iter()
+        .map(|t| format!("{:.2} s after the jaw opens", t))
+        .collect();
+    let ct: Vec<&str> = titles.iter().map(|s| s.as_str()).collect();
+    let rows = [
+        format!("first opening ({} s)", windows[0].0),
+        format!("second opening ({} s)", windows[1].0),
+    ];
+    let rt: Vec<&str> = rows.iter().map(|s| s.as_str()).collect();
+    let labels = GridLabels {
+        title: Some(
+            "Lips that stick again: the jaw opens, closes, holds the lips closed, opens again",
+        ),
+        column_titles: &ct,
+        row_titles: &rt,
+        ..Default::default()
+    };
+    Ok(Image::grid_labelled(
+        &panels,
+        times.len(),
+        8,
+        WHITE,
+        &labels,
+    ))
+}
+
+/// Broken saliva, the open fraction and the jaw angle over time.
+fn restick_plot(run: &crate::paper::runs::Run, n_saliva: usize) -> PlotSpec {
+    let top = PLOSIVE_JAW.iter().fold(0.0f64, |a, k| a.max(k[1]));
+    let mut spec = PlotSpec::new(
+        "Lips that stick again: broken saliva and the open mouth width",
+        "time (s)",
+        "fraction",
+    );
+    spec.series = vec![
+        Series::new(
+            format!("broken saliva elements (of {n_saliva})"),
+            run.series(&|f| f.broken as f64 / n_saliva as f64),
+        )
+        .colour(RED),
+        Series::new(
+            "open fraction of the mouth width",
+            run.series(&|f| f.open_fraction),
+        )
+        .colour(GREEN)
+        .dashed(),
+        Series::new(
+            format!("jaw angle / {top} rad"),
+            PLOSIVE_JAW.iter().map(|k| (k[0], k[1] / top)).collect(),
+        )
+        .colour([120, 120, 120]),
+    ];
+    // room above the curves for the legend
+    spec.y_range = Some((0.0, 1.4));
+    spec.legend = LegendPosition::UpperRight;
+    spec
 }
