@@ -6,9 +6,10 @@ output unchanged byte for byte.
     diff manifest_before.txt manifest_after.txt
 
 What is not compared byte for byte, because it changes from one run to the next whatever the
-code: the wall times in `summary.json` (`wall_time`, `stepping_time`,
-`element_updates_per_second`, `export.read_seconds`, `export.write_seconds`) and the output
-directory's own path where a file names it (replaced by `<OUT>`). Standard output is kept per
+code: the wall times in the JSON files (the keys in `TIMING_KEYS`, at any depth: `wall_time`,
+`stepping_time`, `element_updates_per_second`, `read_seconds`, `write_seconds`, `wall_time_s`)
+and the output directory's own path where a file names it (replaced by `<OUT>`).
+`--rehash` prints the manifest of an existing DIR again without running anything. Standard output is kept per
 command, with any number followed by ` s` (a duration) replaced by `<T> s`.
 """
 
@@ -21,8 +22,8 @@ import subprocess
 import sys
 
 HERE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-TIMING_KEYS = {"wall_time", "stepping_time", "element_updates_per_second"}
-EXPORT_TIMING_KEYS = {"read_seconds", "write_seconds"}
+TIMING_KEYS = {"wall_time", "stepping_time", "element_updates_per_second", "read_seconds",
+               "write_seconds", "wall_time_s"}
 
 
 def commands(out, head):
@@ -54,16 +55,18 @@ def commands(out, head):
     return cmds
 
 
+def without_timings(v):
+    if isinstance(v, dict):
+        return {k: without_timings(x) for k, x in v.items() if k not in TIMING_KEYS}
+    if isinstance(v, list):
+        return [without_timings(x) for x in v]
+    return v
+
+
 def normalised(path, out):
     data = open(path, "rb").read()
-    if os.path.basename(path) == "summary.json":
-        s = json.loads(data)
-        for k in TIMING_KEYS:
-            s.pop(k, None)
-        if isinstance(s.get("export"), dict):
-            for k in EXPORT_TIMING_KEYS:
-                s["export"].pop(k, None)
-        data = json.dumps(s, sort_keys=True).encode()
+    if path.endswith(".json"):
+        data = json.dumps(without_timings(json.loads(data)), sort_keys=True).encode()
     if path.endswith((".json", ".toml", ".pvd", ".csv", ".md", ".txt", ".usda", ".xml")):
         data = data.replace(out.encode(), b"<OUT>")
     return data
@@ -71,25 +74,31 @@ def normalised(path, out):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--bin", required=True)
+    ap.add_argument("--bin")
     ap.add_argument("--out", required=True)
     ap.add_argument("--head", help="a directory with the MakeHuman head.obj and rig.json "
                     "(scripts/makehuman_face.py --head)")
+    ap.add_argument("--rehash", action="store_true", help="only print DIR's manifest again")
     a = ap.parse_args()
     out = os.path.abspath(a.out)
-    os.makedirs(out, exist_ok=False)
-    for k, c in enumerate(commands(out, a.head)):
-        r = subprocess.run([os.path.abspath(a.bin)] + c, cwd=out, capture_output=True, text=True)
-        if r.returncode != 0:
-            sys.exit(f"{' '.join(c)} failed ({r.returncode}):\n{r.stderr}")
-        text = re.sub(r"[0-9.eE+-]+ (s\b|element-updates/s)", r"<T> \1", r.stdout.replace(out, "<OUT>"))
-        with open(os.path.join(out, f"stdout_{k:02}_{c[0]}.txt"), "w") as f:
-            f.write(text)
+    if not a.rehash:
+        run_all(a.bin, out, a.head)
     for root, _, files in sorted(os.walk(out)):
         for name in sorted(files):
             p = os.path.join(root, name)
             rel = os.path.relpath(p, out)
             print(hashlib.sha256(normalised(p, out)).hexdigest(), rel)
+
+
+def run_all(binary, out, head):
+    os.makedirs(out, exist_ok=False)
+    for k, c in enumerate(commands(out, head)):
+        r = subprocess.run([os.path.abspath(binary)] + c, cwd=out, capture_output=True, text=True)
+        if r.returncode != 0:
+            sys.exit(f"{' '.join(c)} failed ({r.returncode}):\n{r.stderr}")
+        text = re.sub(r"[0-9.eE+-]+ (s\b|element-updates/s)", r"<T> \1", r.stdout.replace(out, "<OUT>"))
+        with open(os.path.join(out, f"stdout_{k:02}_{c[0]}.txt"), "w") as f:
+            f.write(text)
 
 
 if __name__ == "__main__":

@@ -31,8 +31,9 @@ pub use crate::tled::solver::SolverState;
 use sha2::{Digest, Sha256};
 use std::path::Path;
 
-/// The checkpoint's file name in a run's output directory.
-pub const FILE_NAME: &str = "checkpoint.bin";
+/// The checkpoint's file name in a run's output directory (the frame writer's, which keeps
+/// it through a restart).
+pub use crate::io::output::CHECKPOINT as FILE_NAME;
 const MAGIC: &[u8; 16] = b"STICKYLIPS-CKPT1";
 /// Version of the layout above and of [`Header`]; a file of another version is refused.
 pub const FORMAT: u32 = 1;

@@ -22,6 +22,8 @@ use std::thread::JoinHandle;
 pub const SUMMARY: &str = "summary.json";
 /// The ParaView collection listing the complete frames with their times.
 pub const PVD: &str = "frames.pvd";
+/// The solver's state for a restart ([`crate::io::checkpoint`]).
+pub const CHECKPOINT: &str = "checkpoint.bin";
 /// A copy of the last frame of a finished run.
 pub const FINAL: &str = "final.vtu";
 
@@ -154,7 +156,7 @@ impl FrameWriter {
             }
         }
         let mut keep_all = keep.clone();
-        keep_all.push(crate::io::checkpoint::FILE_NAME);
+        keep_all.push(CHECKPOINT);
         remove_stale(dir, &keep_all)?;
         let pvd = dir.join(PVD);
         if frames.is_empty() {
@@ -241,7 +243,7 @@ impl FrameWriter {
     /// Hands a checkpoint's bytes to the writer thread: written atomically as
     /// `checkpoint.bin` once the frames handed over before it are on disk.
     pub fn checkpoint(&mut self, bytes: Vec<u8>) -> Result<()> {
-        let path = self.dir.join(crate::io::checkpoint::FILE_NAME);
+        let path = self.dir.join(CHECKPOINT);
         self.send(Job::Checkpoint { path, bytes })
     }
 
@@ -362,13 +364,7 @@ fn remove_stale(dir: &Path, keep: &[&str]) -> Result<()> {
 /// A file of a run's output that a new run into the same directory replaces.
 fn is_ours(name: &str) -> bool {
     (name.starts_with("frame_") && name.ends_with(".vtu"))
-        || [
-            "frames.pvd",
-            "final.vtu",
-            "summary.json",
-            crate::io::checkpoint::FILE_NAME,
-        ]
-        .contains(&name)
+        || ["frames.pvd", "final.vtu", "summary.json", CHECKPOINT].contains(&name)
         || crate::export::FILES.contains(&name)
 }
 

@@ -769,7 +769,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
         subcycles: match sf.time.subcycles {
             None | Some(SubcyclesDef::Auto(_)) => 1,
             Some(SubcyclesDef::Count(n)) => {
-                let max = crate::tled::subcycle::MAX_SUBCYCLES;
+                let max = crate::problem::MAX_SUBCYCLES;
                 if !(1..=max as i64).contains(&n) {
                     return Err(Error::field(
                         f,
@@ -978,7 +978,7 @@ fn set_auto_subcycles(problem: &mut Problem, f: &str) -> Result<()> {
 
 /// The substeps that bring `dt` to at most `fast` (s), refused above `MAX_SUBCYCLES`.
 fn subcycles_for(dt: f64, fast: f64, f: &str) -> Result<usize> {
-    let max = crate::tled::subcycle::MAX_SUBCYCLES;
+    let max = crate::problem::MAX_SUBCYCLES;
     let k = (dt / fast).ceil().max(1.0);
     if !(k <= max as f64) {
         return Err(Error::field(

@@ -41,6 +41,9 @@ pub struct TimeSettings {
     pub output_every: usize,
 }
 
+/// The most substeps per step a run may ask for.
+pub const MAX_SUBCYCLES: usize = 64;
+
 /// Numerical options of the TLED scheme.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Numerics {
@@ -149,7 +152,6 @@ impl Problem {
     /// needs saliva elements (the fast partition), eq. 11's decay in physical time (a decay
     /// per step would change with the substep) and the project's own timing.
     fn validate_subcycles(&self, f: &str) -> Result<()> {
-        use crate::tled::subcycle::MAX_SUBCYCLES;
         let k = self.numerics.subcycles;
         let field = "time.subcycles";
         if !(1..=MAX_SUBCYCLES).contains(&k) {

@@ -37,8 +37,7 @@ use crate::tled::node_update::CentralDifference;
 use crate::tled::precompute::{ConstraintPlan, Discretisation, SalivaPlan};
 use crate::tled::saliva_forces::SalivaState;
 
-/// The most substeps per step a run may ask for.
-pub const MAX_SUBCYCLES: usize = 64;
+pub use crate::problem::MAX_SUBCYCLES;
 
 /// The two partitions of a subcycled run, in the stepping precision.
 #[derive(Clone, Debug)]
