@@ -70,6 +70,10 @@ if [ ! -x .venv/bin/python ]; then
 fi
 .venv/bin/python -m pip install --quiet --disable-pip-version-check -r scripts/requirements.txt
 PY="$ROOT/.venv/bin/python"
+# PyO3's build (python/, the Python package's native module) for this interpreter, without
+# linking libpython, as maturin builds it: the same settings in every cargo command below keep
+# one build of PyO3
+export PYO3_PYTHON="$PY" PYO3_BUILD_EXTENSION_MODULE=1
 
 step "scikit-fem reference data is reproducible (to round-off)"
 "$PY" scripts/skfem_reference.py --check
@@ -90,7 +94,8 @@ step "cargo fmt --check"
 cargo fmt --all -- --check
 
 step "cargo clippy -- -D warnings (with and without the gpu feature, and the library alone)"
-cargo clippy --all-targets -- -D warnings
+# every package, the Python package's native module (python/, not a default member) included
+cargo clippy --workspace --all-targets -- -D warnings
 # without the GPU: the library and the command line (their tests are linted above)
 cargo clippy --lib --bins --no-default-features --features equilibrium -- -D warnings
 # the build the fuzz targets use (no GPU, no static solver)
@@ -105,8 +110,11 @@ rm -rf "$OUT"
 # harness captures a test's own output, so the count is printed from this file instead
 GPU_REPORT="$OUT/gpu-tests.txt"
 mkdir -p "$OUT"
-STICKY_LIPS_GPU_REPORT="$GPU_REPORT" STICKY_LIPS_PAPER_RUNS="$OUT/paper-quick/runs" cargo test --all-targets
-cargo test --doc
+# --workspace: the Python package's native module is built with the rest (it has no Rust
+# tests), so that cargo gives the dependencies it shares with the library the same features,
+# and maturin below reuses them instead of building them again
+STICKY_LIPS_GPU_REPORT="$GPU_REPORT" STICKY_LIPS_PAPER_RUNS="$OUT/paper-quick/runs" cargo test --workspace --all-targets
+cargo test --workspace --doc
 gpu_ran=$(grep -c '^ran ' "$GPU_REPORT" 2>/dev/null || true)
 gpu_skipped=$(grep -c '^skipped ' "$GPU_REPORT" 2>/dev/null || true)
 printf '\n*** GPU tests (verification/gpu.rs): %s ran, %s skipped ***\n' "${gpu_ran:-0}" "${gpu_skipped:-0}"
@@ -119,6 +127,22 @@ if [ "${STICKY_LIPS_REQUIRE_GPU:-}" = "1" ] && { [ "${gpu_ran:-0}" = 0 ] || [ "$
   echo "STICKY_LIPS_REQUIRE_GPU=1 but not every GPU test ran" >&2
   exit 1
 fi
+
+step "Python package (python/): built from source by maturin, its pytest suite"
+# maturin's `dev` profile given the test profile's settings: the library and every dependency
+# that `cargo test --workspace --all-targets` built into target/debug are then reused (cargo
+# keeps one artifact for both profiles when their settings agree; python/Cargo.toml's feature
+# pins make its features agree), and only PyO3, rust-numpy and the native module are compiled
+# again (under maturin's PyO3 configuration): 19 s on the 2-core machine
+PY_T0=$(date +%s)
+rm -rf "$OUT/wheels"
+CARGO_PROFILE_DEV_OPT_LEVEL=2 CARGO_PROFILE_DEV_DEBUG=line-tables-only \
+  "$ROOT/.venv/bin/maturin" build --manifest-path python/Cargo.toml --profile dev \
+  --interpreter "$PY" --auditwheel skip --out "$OUT/wheels"
+"$PY" -m pip install --quiet --disable-pip-version-check --force-reinstall --no-deps "$OUT"/wheels/sticky_lips-*.whl
+echo "python package built and installed in $(($(date +%s) - PY_T0)) s"
+# run() against the CLI bit for bit, cancellation by SIGINT, errors, the docstrings' examples
+STICKY_LIPS_BIN="$ROOT/target/debug/sticky-lips" "$PY" -m pytest -q -rs python/tests
 
 step "CLI runs, outputs checked with meshio"
 # the binary `cargo test --all-targets` built (test profile: optimised, debug assertions on),
