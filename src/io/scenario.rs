@@ -5,15 +5,15 @@
 //! Unknown keys are errors (a typo must not be silently ignored). See
 //! `examples/cantilever.toml` for a complete, commented example.
 
+use crate::boundary::{
+    BoundaryConditions, Fixed, Gravity, LoadCurve, LoadShape, NodalForce, PrescribedDisplacement,
+    PrescribedRotation,
+};
 use crate::element::hex8::GradientVariant;
 use crate::error::{Error, Location, Result};
 use crate::material::NeoHookean;
 use crate::mesh::{generate, Mesh};
 use crate::muscle::Muscle;
-use crate::problem::boundary::{
-    BoundaryConditions, Fixed, Gravity, LoadCurve, LoadShape, NodalForce, PrescribedDisplacement,
-    PrescribedRotation,
-};
 use crate::problem::{table1, MaterialSpec, Numerics, Physics, Problem, SalivaSet, TimeSettings};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -1442,7 +1442,7 @@ impl Reader<'_> {
             }
             (None, None) => unreachable!("called with keys"),
         };
-        let k = crate::problem::boundary::Keyframes::new(keys)
+        let k = crate::boundary::Keyframes::new(keys)
             .map_err(|m| Error::field(&label, key_field, m))?;
         Ok(LoadCurve {
             shape: LoadShape::Keyed(std::sync::Arc::new(k)),
