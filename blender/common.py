@@ -25,7 +25,7 @@ def prefs(context):
 
 def executable(context):
     p = prefs(context)
-    return cli.find(p.executable if p else "")
+    return cli.find(bpy.path.abspath(p.executable) if p and p.executable else "")
 
 
 def work_dir(context, obj):

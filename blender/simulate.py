@@ -7,6 +7,7 @@ sends SIGINT: the run stops between two steps keeping its complete frames, and `
 export` then writes the animation files of that partial run, so that Load result plays it.
 """
 
+import atexit
 import math
 import os
 import shutil
@@ -197,6 +198,13 @@ def stop_all():
         JOB = None
     if bpy.app.timers.is_registered(poll):
         bpy.app.timers.unregister(poll)
+
+
+@atexit.register
+def _kill_at_exit():
+    """Blender quits: the run it started does not go on without it."""
+    if JOB is not None:
+        JOB["process"].kill()
 
 
 class STICKY_LIPS_OT_simulate(bpy.types.Operator):
