@@ -11,7 +11,8 @@
 # 6. the paper's figures from one command (--quick), the MakeHuman assets re-derived;
 # 7. the animation files (PC2, MDD, USD) of the default job, of a user's head made runnable
 #    by `sticky-lips face`, and of the procedural mouth, read back by usd-core and by Blender
-#    (PyPI bpy, headless) in .venv-anim (scripts/check_animation.py);
+#    (PyPI bpy, headless) in .venv-anim (scripts/check_animation.py); the Blender extension
+#    (blender/) built, installed from its zip and driven headless (scripts/blender_addon_test.py);
 # 8. every fuzz target for FUZZ_SECONDS (default 10) seconds (scripts/fuzz.sh: installs
 #    cargo-fuzz, builds with RUSTC_BOOTSTRAP=1).
 # Mutation testing is its own command (scripts/mutants.sh; see verification/README.md).
@@ -279,6 +280,17 @@ echo "measured (2026-12-04, paper --quick --model procedural, fig4_sticky): firs
   > "$OUT/paper-procedural/runs/fig4_sticky/unzips_off_centre"
 ANIM="$ANIM:$OUT/paper-procedural/runs/fig4_sticky"
 STICKY_LIPS_ANIM_OUT="$ANIM" .venv-anim/bin/python -m pytest -q -rs scripts/check_animation.py
+# the Blender extension (blender/): its zip made by Blender's own builder, installed from the
+# zip and driven headless as an artist would, on the MakeHuman head (scripts/blender_addon_test.py)
+if [ -s "$OUT/makehuman-head/head.obj" ]; then
+  TB=$(date +%s)
+  ZIP=$(.venv-anim/bin/python scripts/build_blender_extension.py --out "$OUT/blender-extension")
+  STICKY_LIPS_BIN="$BIN" .venv-anim/bin/python scripts/blender_addon_test.py "$ZIP" \
+    "$OUT/makehuman-head" "$OUT/blender-addon"
+  echo "Blender extension test: $(($(date +%s) - TB)) s"
+else
+  printf '\n*** SKIPPED: the Blender extension test (no MakeHuman head: PyPI not reachable) ***\n\n' >&2
+fi
 
 step "fuzz targets: every parser, ${FUZZ_SECONDS:-10} s each from the committed corpus (scripts/fuzz.sh)"
 FUZZ_SECONDS=${FUZZ_SECONDS:-10} bash scripts/fuzz.sh

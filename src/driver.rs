@@ -439,7 +439,9 @@ fn run_with<S: Stepper>(
     if let Some(m) = &history.measures {
         crate::run_dir::write_measures(&opts.out, m)?;
     }
-    if let (Some(skin), true) = (&problem.physics.skin, opts.export) {
+    // an interrupted run stops here: its token is cancelled, so the export would refuse at
+    // once and take the summary with it (`sticky-lips export` writes the files from its frames)
+    if let (Some(skin), true, None) = (&problem.physics.skin, opts.export, &interrupted) {
         // from the frames on disk: every one handed over first
         writer.flush()?;
         if writer.frames_written() > 0 {
@@ -552,4 +554,55 @@ pub fn equilibrium(
         writer.finish(&summary)?;
         Ok(summary)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A face run cancelled after its second frame (as SIGINT does on the command line) ends
+    /// with `Interrupted` and leaves what the README promises: `summary.json` saying where it
+    /// stopped and its complete frames, from which `export` then writes the animation files
+    /// (before, the driver's own export refused on the cancelled token and no summary was
+    /// written).
+    #[test]
+    fn a_cancelled_face_run_keeps_its_summary_and_frames_for_export() {
+        let dir =
+            std::env::temp_dir().join(format!("sticky-lips-cancel-face-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let text = "[mesh]\ngenerator = \"face\"\n[mesh.face]\nresolution = 0.25\n\
+            [[materials]]\nname = \"tissue\"\nelements = \"tissue\"\nmu = 800.0\nK = 7000.0\ndensity = 1050.0\n\
+            [[materials]]\nname = \"saliva\"\nelements = \"saliva\"\nmu = 7700.0\nK = 191000.0\ndensity = 1050.0\n\
+            [[saliva]]\nmaterial = \"saliva\"\ncritical_moisture = 100.0\ninitial_moisture = 100.0\nk_glue = 0.1\n\
+            [[fix]]\nnodes = \"skull\"\n[jaw]\nangle = 0.15\nduration = 0.5\n\
+            [time]\ndt = \"auto\"\ntotal = 10.0\noutput_interval = 0.004\n";
+        let p = crate::io::scenario::parse(text, &dir.join("long.toml"))
+            .unwrap()
+            .problem;
+        let mut opts = RunOptions::new(dir.join("run"), Precision::F64, 2);
+        let cancel = opts.cancel.clone();
+        opts.progress = Some(OnProgress::new(move |u: &ProgressUpdate| {
+            if u.frames >= 2 {
+                cancel.cancel();
+            }
+        }));
+        let e = run(&p, &opts).unwrap_err();
+        let crate::error::Error::Interrupted { step, .. } = e else {
+            panic!("not interrupted: {e}");
+        };
+        let out = dir.join("run");
+        let summary: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+        assert_eq!(summary["interrupted"]["step"].as_u64(), Some(step as u64));
+        let frames = summary["frames"].as_u64().unwrap() as usize;
+        assert!(frames >= 2 && step < 2500, "{frames} frames, step {step}");
+        assert!(
+            !out.join("skin.pc2").exists(),
+            "the driver exported after the cancel"
+        );
+        let e = crate::export::export(p.physics.skin.as_ref().unwrap(), &out).unwrap();
+        assert_eq!(e.frames, frames);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

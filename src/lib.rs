@@ -15,6 +15,7 @@
 
 pub mod app;
 pub mod blend;
+pub mod boundary;
 pub mod claims;
 pub mod control;
 pub mod driver;

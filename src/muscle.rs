@@ -8,7 +8,7 @@
 //! equally among the selected nodes (our choice: the paper does not say; an equal share keeps
 //! the total exactly `activation * strength` whatever the mesh resolution).
 
-use crate::problem::boundary::LoadCurve;
+use crate::boundary::LoadCurve;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Muscle {

@@ -27,9 +27,9 @@
 //! Everything runs in `f64` and is deterministic: element tangents are computed in
 //! parallel but summed in element order into a fixed sparsity pattern.
 
+use crate::boundary::PrescribedRotation;
 use crate::error::{Error, Result};
 use crate::material::neo_hookean::{material_tangent, pk2_stress};
-use crate::problem::boundary::PrescribedRotation;
 use crate::problem::Problem;
 use crate::tled::element_forces::{element_forces, ElementArrays};
 use crate::tled::node_update::gather_all;
@@ -570,13 +570,13 @@ fn norm(v: &[f64]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::boundary::{
+        BoundaryConditions, Fixed, LoadCurve, LoadShape, NodalForce, PrescribedDisplacement,
+    };
     use crate::element::hex8::GradientVariant;
     use crate::material::NeoHookean;
     use crate::mesh::generate::{block, distorted_block, SplitMix64};
     use crate::mesh::Mesh;
-    use crate::problem::boundary::{
-        BoundaryConditions, Fixed, LoadCurve, LoadShape, NodalForce, PrescribedDisplacement,
-    };
     use crate::problem::{MaterialSpec, Numerics, TimeSettings};
     use crate::tled::element_forces::element_force;
 

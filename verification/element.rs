@@ -4,12 +4,12 @@
 //! Also holds the small problem builders shared by the other verification modules.
 #![allow(dead_code, clippy::needless_range_loop)] // index loops mirror the tensor notation
 
+use sticky_lips::boundary::BoundaryConditions;
 use sticky_lips::element::hex8::GradientVariant;
 use sticky_lips::material::neo_hookean::{material_tangent, pk2_stress, strain_energy_density};
 use sticky_lips::material::NeoHookean;
 use sticky_lips::mesh::generate::{distorted_block, SplitMix64};
 use sticky_lips::mesh::Mesh;
-use sticky_lips::problem::boundary::BoundaryConditions;
 use sticky_lips::problem::{MaterialSpec, Numerics, Problem, TimeSettings};
 use sticky_lips::tled::element_forces::element_force;
 use sticky_lips::tled::precompute::Discretisation;

@@ -757,8 +757,8 @@ fn divergence(e: &sticky_lips::Error) -> (usize, Option<usize>, Option<usize>) {
 /// bit for bit; otherwise a finite state, the step within 2 % of the CPU's.
 #[test]
 fn gpu_divergence_stops_where_the_cpu_does() {
+    use sticky_lips::boundary::Fixed;
     use sticky_lips::gpu::sim::MAX_BATCH;
-    use sticky_lips::problem::boundary::Fixed;
     use sticky_lips::tled::precompute::Discretisation;
     use sticky_lips::tled::stability::analyse;
     let Some(probe) = adapter("gpu_divergence_stops_where_the_cpu_does") else {

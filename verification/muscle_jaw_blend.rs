@@ -4,13 +4,13 @@
 
 use crate::element::{max_abs8, problem};
 use sticky_lips::blend::blend;
+use sticky_lips::boundary::{
+    BoundaryConditions, Fixed, LoadCurve, LoadShape, PrescribedDisplacement, PrescribedRotation,
+};
 use sticky_lips::element::hex8::GradientVariant;
 use sticky_lips::linalg::{cross, dot, norm, sub};
 use sticky_lips::mesh::generate::{distorted_block, SplitMix64};
 use sticky_lips::muscle::Muscle;
-use sticky_lips::problem::boundary::{
-    BoundaryConditions, Fixed, LoadCurve, LoadShape, PrescribedDisplacement, PrescribedRotation,
-};
 use sticky_lips::problem::{Problem, TimeSettings};
 use sticky_lips::static_solve::{solve_equilibrium, StaticOptions};
 use sticky_lips::tled::precompute::Discretisation;
@@ -564,7 +564,7 @@ fn face_jaw_run(dir: &std::path::Path, jaw: &str) -> Vec<[f64; 3]> {
 }
 
 /// Keyframes are the curve's value in absolute time, linear between keys (a keyed curve,
-/// `problem::boundary::Keyframes`): keys on a ramp give the ramp's run bit for bit, from the
+/// `boundary::Keyframes`): keys on a ramp give the ramp's run bit for bit, from the
 /// scenario (`keys`, in seconds) and from a file an animation package writes (`keys_file`,
 /// CSV in frames at 24 fps; JSON in seconds). The jaw is 0.6 % of its way after 0.03 s.
 #[test]

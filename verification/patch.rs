@@ -4,13 +4,11 @@
 #![allow(clippy::needless_range_loop)] // index loops mirror the tensor notation
 
 use crate::element::{problem, VARIANTS};
+use sticky_lips::boundary::{BoundaryConditions, LoadCurve, LoadShape, PrescribedDisplacement};
 use sticky_lips::element::hex8::GradientVariant;
 use sticky_lips::material::neo_hookean::pk2_stress;
 use sticky_lips::mesh::generate::distorted_block;
 use sticky_lips::mesh::Mesh;
-use sticky_lips::problem::boundary::{
-    BoundaryConditions, LoadCurve, LoadShape, PrescribedDisplacement,
-};
 use sticky_lips::problem::TimeSettings;
 use sticky_lips::static_solve::{solve_equilibrium, StaticOptions};
 use sticky_lips::tled::element_forces::{element_forces, ElementArrays};

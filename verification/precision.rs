@@ -2,11 +2,11 @@
 //! f32 stage), the f32 path cannot, and results are bit-identical on any thread count.
 
 use crate::element::{bare_problem, force_of, problem};
-use sticky_lips::element::hex8::GradientVariant;
-use sticky_lips::mesh::generate::{block, SplitMix64};
-use sticky_lips::problem::boundary::{
+use sticky_lips::boundary::{
     BoundaryConditions, Fixed, LoadCurve, LoadShape, NodalForce, PrescribedDisplacement,
 };
+use sticky_lips::element::hex8::GradientVariant;
+use sticky_lips::mesh::generate::{block, SplitMix64};
 use sticky_lips::problem::{Problem, TimeSettings};
 use sticky_lips::tled::precompute::Discretisation;
 use sticky_lips::tled::simd::SimdReal;

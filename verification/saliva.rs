@@ -5,6 +5,9 @@
 #![allow(clippy::needless_range_loop)] // index loops mirror the tensor notation
 
 use std::f64::consts::PI;
+use sticky_lips::boundary::{
+    BoundaryConditions, Fixed, LoadCurve, LoadShape, PrescribedDisplacement,
+};
 use sticky_lips::material::saliva::{
     across_direction, breaking_point, evaporation_rates, herz_knudsen_flux, moisture,
     stretch_across, water_saturation_pressure, BreakingRule, Decay, EvaporationSchedule,
@@ -13,9 +16,6 @@ use sticky_lips::material::saliva::{
 use sticky_lips::material::NeoHookean;
 use sticky_lips::mesh::generate::{block, SplitMix64};
 use sticky_lips::mesh::Mesh;
-use sticky_lips::problem::boundary::{
-    BoundaryConditions, Fixed, LoadCurve, LoadShape, PrescribedDisplacement,
-};
 use sticky_lips::problem::{MaterialSpec, Numerics, Physics, Problem, SalivaSet, TimeSettings};
 use sticky_lips::tled::element_forces::element_force;
 use sticky_lips::tled::precompute::Discretisation;

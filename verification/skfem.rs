@@ -8,11 +8,11 @@
 use crate::element::{bare_problem, force_of, problem};
 use crate::patch::internal_forces;
 use serde_json::Value;
-use sticky_lips::element::hex8::GradientVariant;
-use sticky_lips::mesh::Mesh;
-use sticky_lips::problem::boundary::{
+use sticky_lips::boundary::{
     BoundaryConditions, Fixed, LoadCurve, LoadShape, PrescribedDisplacement,
 };
+use sticky_lips::element::hex8::GradientVariant;
+use sticky_lips::mesh::Mesh;
 use sticky_lips::problem::TimeSettings;
 use sticky_lips::static_solve::{solve_equilibrium, StaticOptions};
 use sticky_lips::tled::precompute::Discretisation;

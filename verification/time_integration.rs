@@ -3,12 +3,12 @@
 //! `2 / omega_max`, and convergence of a damped run to the static equilibrium.
 
 use crate::element::problem;
+use sticky_lips::boundary::{
+    BoundaryConditions, Fixed, LoadCurve, LoadShape, NodalForce, PrescribedDisplacement,
+};
 use sticky_lips::element::hex8::GradientVariant;
 use sticky_lips::mesh::generate::{block, distorted_block};
 use sticky_lips::mesh::Mesh;
-use sticky_lips::problem::boundary::{
-    BoundaryConditions, Fixed, LoadCurve, LoadShape, NodalForce, PrescribedDisplacement,
-};
 use sticky_lips::problem::{Problem, TimeSettings};
 use sticky_lips::static_solve::{solve_equilibrium, StaticOptions};
 use sticky_lips::tled::precompute::Discretisation;

@@ -1,12 +1,12 @@
 //! Models shared by the benchmarks (`benches/tled.rs`, `benches/gpu.rs`): NiftySim's
 //! `timing_block20` scaled to `c^3` hexahedra, and the paper's mouth scene.
 
+use sticky_lips::boundary::{
+    BoundaryConditions, Fixed, LoadCurve, LoadShape, PrescribedDisplacement,
+};
 use sticky_lips::element::hex8::GradientVariant;
 use sticky_lips::material::NeoHookean;
 use sticky_lips::mesh::generate::block;
-use sticky_lips::problem::boundary::{
-    BoundaryConditions, Fixed, LoadCurve, LoadShape, PrescribedDisplacement,
-};
 use sticky_lips::problem::{MaterialSpec, Numerics, TimeSettings};
 use sticky_lips::tled::stability::element_estimates;
 use sticky_lips::Problem;

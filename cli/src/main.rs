@@ -734,7 +734,7 @@ fn export(
     let input = InputArgs {
         input: match scenario {
             Some(s) => s,
-            None => sticky_lips::run_dir::RunDir::new(&run_dir).input()?,
+            None => sticky_lips::run_dir::RunDir::new(run_dir).input()?,
         },
         niftysim_compat: false,
     };
@@ -748,8 +748,8 @@ fn export(
     };
     if let Some(path) = skin_map {
         // the map is a new file: never one of the run's files or the scenario
-        let mut inputs: Vec<PathBuf> = std::fs::read_dir(&run_dir)
-            .map_err(|e| sticky_lips::Error::io(&run_dir, e))?
+        let mut inputs: Vec<PathBuf> = std::fs::read_dir(run_dir)
+            .map_err(|e| sticky_lips::Error::io(run_dir, e))?
             .filter_map(|e| e.ok().map(|e| e.path()))
             .collect();
         inputs.push(input.input.clone());
@@ -762,15 +762,15 @@ fn export(
             path.file_name().and_then(|n| n.to_str()).unwrap_or(""),
         );
         sticky_lips::io::atomic::refuse_overwriting_inputs(dir, &[name], &named)?;
-        let map = sticky_lips::export::skin_map(skin, &run_dir)?;
+        let map = sticky_lips::export::skin_map(skin, run_dir)?;
         let text = serde_json::to_string(&map).expect("json");
         sticky_lips::io::atomic::write_atomic(&path, text.as_bytes())
             .map_err(|e| sticky_lips::Error::io(&path, e))?;
         println!("export: the skin mapping written to {}", path.display());
         return Ok(());
     }
-    let e = sticky_lips::export::export_with(skin, &run_dir, &progress::cancel_token())?;
-    app::preview::write(&p, &run_dir)?;
+    let e = sticky_lips::export::export_with(skin, run_dir, &progress::cancel_token())?;
+    app::preview::write(&p, run_dir)?;
     println!(
         "export: {} frames of {} vertices ({} over the model, {} beside it, {} following the jaw) to {}",
         e.frames,
@@ -785,7 +785,7 @@ fn export(
 
 /// `sticky-lips check`: an input's mesh statistics, time step and stability limits.
 fn check(input: &InputArgs) -> sticky_lips::Result<()> {
-    let (p, _) = load(&input)?;
+    let (p, _) = load(input)?;
     let st = p.mesh.stats();
     let d = Discretisation::new(&p);
     let r = stability::analyse(&p, &d);

@@ -193,6 +193,91 @@ fn interrupted_runs_leave_complete_frames_and_say_where_they_stopped() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `run --progress json`: every stdout line is one JSON object; the progress events rise from
+/// step 0 to the last step with their frame counts, the last line is `finished` with the
+/// summary's steps and frames; interrupted by SIGINT the last line is `interrupted` at the
+/// step the summary names, exit status 130.
+#[test]
+fn progress_json_lines_rise_to_the_end_and_close_with_the_outcome() {
+    use std::io::BufRead;
+    use std::process::{Command, Stdio};
+    let bin = env!("CARGO_BIN_EXE_sticky-lips");
+    let dir = std::env::temp_dir().join(format!("sticky-lips-json-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let lines = |stdout: &[u8]| -> Vec<serde_json::Value> {
+        stdout
+            .lines()
+            .map(|l| serde_json::from_str(&l.unwrap()).expect("each line is JSON"))
+            .collect()
+    };
+    // a whole run: 100 steps of the small block
+    let case = dir.join("case.toml");
+    std::fs::write(&case, GOOD_TOML).unwrap();
+    let out = dir.join("whole");
+    let o = Command::new(bin)
+        .args(["run", case.to_str().unwrap(), "--progress", "json", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v = lines(&o.stdout);
+    let (last, progress) = v.split_last().unwrap();
+    assert!(progress.iter().all(|p| p["event"] == "progress"), "{v:?}");
+    let steps: Vec<u64> = progress
+        .iter()
+        .map(|p| p["step"].as_u64().unwrap())
+        .collect();
+    assert_eq!(steps.first(), Some(&0));
+    assert!(steps.windows(2).all(|w| w[0] < w[1]), "{steps:?}");
+    assert_eq!(steps.last().copied(), progress[0]["steps"].as_u64());
+    assert!(progress[0]["seconds_left"].is_null());
+    assert_eq!(progress.last().unwrap()["seconds_left"], 0.0);
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(last["event"], "finished");
+    assert_eq!(last["steps"], summary["steps"]);
+    assert_eq!(last["frames"], summary["frames"]);
+    assert_eq!(progress.last().unwrap()["frames"], summary["frames"]);
+    // interrupted: the 10^6-step block, SIGINT after its second frame
+    let long = dir.join("long.toml");
+    std::fs::write(
+        &long,
+        GOOD_TOML
+            .replace("cells = [2, 2, 2]", "cells = [10, 10, 10]")
+            .replace("total = 0.01", "total = 100.0\noutput_every = 2000"),
+    )
+    .unwrap();
+    let out = dir.join("interrupted");
+    let child = Command::new(bin)
+        .args(["run", long.to_str().unwrap(), "--progress", "json", "--out"])
+        .arg(&out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = std::time::Instant::now();
+    while !out.join("frame_000001.vtu").exists() {
+        assert!(t0.elapsed().as_secs() < 60, "no second frame within 60 s");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130));
+    let v = lines(&o.stdout);
+    let last = v.last().unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(last["event"], "interrupted", "{v:?}");
+    assert_eq!(last["step"], summary["interrupted"]["step"]);
+    assert!(v[..v.len() - 1].iter().all(|p| p["event"] == "progress"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// `sweep` honours SIGTERM: no further run starts, the running one is stopped as an
 /// interrupted run (its summary.json says so), and sweep.json lists what ran and what did
 /// not; the sweep exits with 130.

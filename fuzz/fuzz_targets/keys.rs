@@ -10,7 +10,7 @@
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 use sticky_lips::io::keys::parse_keys;
-use sticky_lips::problem::boundary::Keyframes;
+use sticky_lips::boundary::Keyframes;
 
 const FPS: [Option<f64>; 8] = [
     None,

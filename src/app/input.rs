@@ -169,7 +169,7 @@ pub fn out_dir(explicit: Option<PathBuf>, default: Option<PathBuf>, input: &Path
 pub fn default_job_text(path: &Path, dt: Option<scenario::DtChoice>) -> Result<String> {
     use crate::paper::{scenario_of, spec, Model};
     let run = spec(Model::Face, true, "fig4_sticky").expect("the paper defines fig4_sticky");
-    let (text, _) = scenario_of(Model::Face, true, &run, &path)?;
+    let (text, _) = scenario_of(Model::Face, true, &run, path)?;
     let label = path.display().to_string();
     // at dt = "auto" unless asked otherwise: the frames every 10 ms and eq. 11's decay in
     // physical time (Table 1's 0.99 per 1e-5 s), as the paper's run has them

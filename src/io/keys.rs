@@ -1,5 +1,5 @@
 //! Keyframes from the files animation packages export: `(time, value)` pairs for a keyed
-//! curve ([`crate::problem::boundary::Keyframes`]).
+//! curve ([`crate::boundary::Keyframes`]).
 //!
 //! * **CSV** (or any text table): one key per line, time and value separated by a comma,
 //!   semicolon, tab or spaces; blank lines and lines starting with `#` are skipped, and so is

@@ -7,13 +7,13 @@
 //! `Fix` on the same DOF and several `Disp` values on one DOF add up. Values are SI.
 //! Every error names the file and the line.
 
+use crate::boundary::{
+    BoundaryConditions, Fixed, Gravity, LoadCurve, LoadShape, NodalForce, PrescribedDisplacement,
+};
 use crate::element::hex8::GradientVariant;
 use crate::error::{Error, Location, Result};
 use crate::material::NeoHookean;
 use crate::mesh::Mesh;
-use crate::problem::boundary::{
-    BoundaryConditions, Fixed, Gravity, LoadCurve, LoadShape, NodalForce, PrescribedDisplacement,
-};
 use crate::problem::{MaterialSpec, Numerics, Problem, TimeSettings};
 use roxmltree::{Document, Node};
 use std::path::Path;

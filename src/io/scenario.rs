@@ -5,15 +5,15 @@
 //! Unknown keys are errors (a typo must not be silently ignored). See
 //! `examples/cantilever.toml` for a complete, commented example.
 
+use crate::boundary::{
+    BoundaryConditions, Fixed, Gravity, LoadCurve, LoadShape, NodalForce, PrescribedDisplacement,
+    PrescribedRotation,
+};
 use crate::element::hex8::GradientVariant;
 use crate::error::{Error, Location, Result};
 use crate::material::NeoHookean;
 use crate::mesh::{generate, Mesh};
 use crate::muscle::Muscle;
-use crate::problem::boundary::{
-    BoundaryConditions, Fixed, Gravity, LoadCurve, LoadShape, NodalForce, PrescribedDisplacement,
-    PrescribedRotation,
-};
 use crate::problem::{table1, MaterialSpec, Numerics, Physics, Problem, SalivaSet, TimeSettings};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -787,6 +787,10 @@ pub fn parse(text: &str, path: &Path) -> Result<Scenario> {
     let base = path.parent().unwrap_or(Path::new("."));
     let scale = sf.units.length.unwrap_or_default().metres();
     let (mut mesh, anatomy, skin) = build_mesh(&sf.mesh, f, base, scale)?;
+    // a mouth model's saliva by zone (`saliva_left`, `saliva_centre`, `saliva_right`)
+    if let Some(a) = &anatomy {
+        crate::mesh::zones::add_saliva_sets(&mut mesh, &a.columns);
+    }
     add_node_sets(&mut mesh, &sf.node_sets, f, scale)?;
     let r = Reader {
         f,
@@ -1340,35 +1344,14 @@ impl Reader<'_> {
                             )
                         })?
                         .columns;
-                    let (lo, hi) = cols
-                        .x
-                        .iter()
-                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-                            (a.min(x), b.max(x))
-                        });
-                    let third = (hi - lo) / 6.0;
-                    let c = cols.center;
-                    let keep: Box<dyn Fn(f64) -> bool> = match zone.as_str() {
-                        "left" => Box::new(move |x| x >= c + third),
-                        "right" => Box::new(move |x| x <= c - third),
-                        "centre" | "center" => Box::new(move |x| (x - c).abs() < third),
-                        "all" => Box::new(|_| true),
-                        other => {
-                            return Err(Error::field(
-                                f,
-                                format!("{field}.zone"),
-                                format!("unknown zone `{other}` (left, right, centre, all)"),
-                            ))
-                        }
-                    };
-                    saliva
-                        .iter()
-                        .copied()
-                        .filter(|&e| {
-                            let x = self.mesh.element_coords(e as usize);
-                            keep(x.iter().map(|p| p[0]).sum::<f64>() / 8.0)
-                        })
-                        .collect()
+                    let zone = crate::mesh::zones::Zone::from_name(zone).ok_or_else(|| {
+                        Error::field(
+                            f,
+                            format!("{field}.zone"),
+                            format!("unknown zone `{zone}` (left, right, centre, all)"),
+                        )
+                    })?;
+                    crate::mesh::zones::elements(self.mesh, &saliva, cols, zone)
                 }
             };
             if elements.is_empty() {
@@ -1442,7 +1425,7 @@ impl Reader<'_> {
             }
             (None, None) => unreachable!("called with keys"),
         };
-        let k = crate::problem::boundary::Keyframes::new(keys)
+        let k = crate::boundary::Keyframes::new(keys)
             .map_err(|m| Error::field(&label, key_field, m))?;
         Ok(LoadCurve {
             shape: LoadShape::Keyed(std::sync::Arc::new(k)),

@@ -4,10 +4,10 @@
 //! ([`super::face`]) both provide one, so `[jaw]`, `[[model_muscle]]`, the measures and the
 //! figures work the same on either.
 
+use crate::boundary::{LoadCurve, PrescribedRotation};
 use crate::material::saliva::AcrossAxis;
 use crate::measures::LipColumns;
 use crate::muscle::Muscle;
-use crate::problem::boundary::{LoadCurve, PrescribedRotation};
 
 #[derive(Clone, Debug)]
 pub struct MouthAnatomy {

@@ -8,6 +8,7 @@ pub mod generate;
 pub mod mouth;
 pub mod skin;
 pub mod surface;
+pub mod zones;
 
 use crate::element::hex8;
 use crate::error::{Error, Location, Result};

@@ -69,10 +69,10 @@
 
 use super::extrude::{extrude_with, Direction};
 use super::Mesh;
+use crate::boundary::{Fixed, LoadCurve, LoadShape, PrescribedRotation};
 use crate::error::{Error, Result};
 use crate::mesh::surface::QuadSurface;
 use crate::muscle::Muscle;
-use crate::problem::boundary::{Fixed, LoadCurve, LoadShape, PrescribedRotation};
 use std::f64::consts::FRAC_PI_2;
 
 /// Parameters of the procedural mouth (SI metres, radians). Every field has a default
@@ -900,7 +900,7 @@ mod tests {
     /// and hourglass coefficient, skull fixed and jaw prescribed.
     #[test]
     fn table_1_time_step_is_stable() {
-        use crate::problem::boundary::BoundaryConditions;
+        use crate::boundary::BoundaryConditions;
         use crate::problem::{table1, Numerics, Physics, Problem, TimeSettings};
         use crate::tled::precompute::Discretisation;
         use crate::tled::stability::analyse;

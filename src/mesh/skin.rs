@@ -26,9 +26,9 @@
 //! (whose first vertices are the user's) and kept for the user's vertices, and the files
 //! carry the user's own faces.
 
+use crate::boundary::PrescribedRotation;
 use crate::error::{Error, Result};
 use crate::mesh::surface::{PolySurface, QuadSurface};
-use crate::problem::boundary::PrescribedRotation;
 
 /// How vertices are tied to the model's surface (SI metres).
 #[derive(Clone, Debug, PartialEq)]
@@ -568,7 +568,7 @@ fn bbox(q: &[[f64; 3]; 4]) -> ([f64; 2], [f64; 2]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::problem::boundary::{LoadCurve, LoadShape};
+    use crate::boundary::{LoadCurve, LoadShape};
 
     /// A flat model surface: 4 x 2 unit quads of 10 mm at z = 0, vertex `i + 5 j` at
     /// `(10 i, 10 j)` mm.

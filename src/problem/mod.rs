@@ -3,7 +3,8 @@
 //! readers in `io` convert on the way in. Nothing here depends on the solver: `boundary`
 //! describes the constraints and loads, `table1` holds the paper's parameters.
 
-pub mod boundary;
+/// The boundary conditions and load curves (`crate::boundary`), here too by their old path.
+pub use crate::boundary;
 pub mod table1;
 
 use crate::element::hex8::GradientVariant;

@@ -2,10 +2,10 @@
 //! element gradients and weights, hourglass vectors and stiffnesses, lumped masses,
 //! the node gather lists, and the constraint and load plans.
 
+use crate::boundary::{LoadCurve, PrescribedRotation};
 use crate::element::hex8;
 use crate::material::saliva::{self, SalivaParams};
 use crate::mesh::NodeGather;
-use crate::problem::boundary::{LoadCurve, PrescribedRotation};
 use crate::problem::Problem;
 
 /// Per-DOF constraint plan. A DOF index is `3 * node + component`.

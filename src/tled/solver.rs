@@ -8,8 +8,8 @@
 //! 5. `apply_constraints`: fixed, prescribed and rotated DOFs set at `t_{s+1}`;
 //! 6. buffers rotate.
 
+use crate::boundary::LoadCurve;
 use crate::error::{Error, Result};
-use crate::problem::boundary::LoadCurve;
 use crate::problem::Problem;
 use crate::real::Real;
 use crate::tled::element_forces::{element_forces, ElementArrays};

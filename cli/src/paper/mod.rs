@@ -186,7 +186,7 @@ fn draw_figures(
             )
         })?;
         let t0 = Instant::now();
-        let o = (f.produce)(&ctx)?;
+        let o = (f.produce)(ctx)?;
         for (name, img) in &o.images {
             save_png(&out.join(name), img)?;
             written.push(name.clone());

@@ -176,7 +176,7 @@ impl Run {
             .rotations
             .first()
             .map(|r| match &r.curve.shape {
-                sticky_lips::problem::boundary::LoadShape::Keyed(k) => {
+                sticky_lips::boundary::LoadShape::Keyed(k) => {
                     r.angle * k.keys().iter().fold(0.0f64, |a, k| a.max(k.1))
                 }
                 _ => r.angle,

@@ -254,7 +254,7 @@ pub(crate) fn fill_step_row(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::problem::boundary::{
+    use crate::boundary::{
         BoundaryConditions, Fixed, LoadCurve, LoadShape, PrescribedDisplacement, PrescribedRotation,
     };
     use crate::problem::{table1, Numerics, Physics, TimeSettings};

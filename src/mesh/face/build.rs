@@ -48,6 +48,7 @@
 //! (8)-(10), given to the saliva rule per element ([`FaceModel::saliva_across`]).
 
 use super::prepare::{FaceSource, MuscleLandmarks};
+use crate::boundary::{Fixed, LoadCurve, LoadShape, PrescribedRotation};
 use crate::error::{Error, Location, Result};
 use crate::linalg::{cross, dot, sub, unit};
 use crate::measures::LipColumns;
@@ -55,7 +56,6 @@ use crate::mesh::extrude::{extrude_with, Direction};
 use crate::mesh::surface::QuadSurface;
 use crate::mesh::Mesh;
 use crate::muscle::Muscle;
-use crate::problem::boundary::{Fixed, LoadCurve, LoadShape, PrescribedRotation};
 use std::collections::BTreeMap;
 
 /// The chin's outline is searched from this far below the lower lip's contour (m): the
