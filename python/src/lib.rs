@@ -186,6 +186,8 @@ impl Problem {
     /// the summary marked interrupted are written (a `KeyboardInterrupt` as
     /// `RunInterrupted`, naming `out`).
     #[pyo3(signature = (out, precision = "f64", backend = "cpu", threads = None, force_dt = false, progress = None))]
+    // one argument per keyword of the Python signature
+    #[allow(clippy::too_many_arguments)]
     fn run(
         &self,
         py: Python<'_>,
@@ -240,6 +242,7 @@ fn finish(
 /// model's files; returns the detected unit, the notes and the wall time.
 #[pyfunction]
 #[pyo3(signature = (input, out, rig = None, units = "auto", up = "auto", forward = "auto", params = None, resolution = 1.0))]
+// one argument per keyword of the Python signature (`sticky-lips face`'s options)
 #[allow(clippy::too_many_arguments)]
 fn face<'py>(
     py: Python<'py>,

@@ -1,6 +1,7 @@
 # Type stubs of the native module (python/src/lib.rs). Private: the package's public API is
 # sticky_lips (Scenario, Run, open_run, face), which documents what these return.
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
+from pathlib import Path
+from typing import Any, Callable, Dict, Optional, Sequence, Tuple, Union
 
 VERSION: str
 
@@ -8,7 +9,7 @@ class Problem:
     @property
     def source(self) -> str: ...
     @property
-    def default_output(self) -> Optional[str]: ...
+    def default_output(self) -> Optional[Path]: ...
     def check(self) -> Dict[str, Any]: ...
     def run(
         self,

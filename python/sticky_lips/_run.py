@@ -125,7 +125,9 @@ class Run:
     >>> deformed = run.rest + run.frames[-1]                    # doctest: +SKIP
     """
 
-    def __init__(self, out: PathLike, *, _keep: Optional[tempfile.TemporaryDirectory] = None) -> None:
+    def __init__(
+        self, out: PathLike, *, _keep: Optional["tempfile.TemporaryDirectory[str]"] = None
+    ) -> None:
         self._out = Path(os.fspath(out))
         # a temporary output directory lives as long as this object
         self._keep = _keep

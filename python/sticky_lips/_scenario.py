@@ -6,7 +6,7 @@ import os
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Mapping, Optional, Tuple, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Tuple, Union
 
 from . import _native
 from ._run import Progress, Run
@@ -168,8 +168,9 @@ class Scenario:
         name: PathLike = "<string>",
         overrides: Optional[Mapping[str, Any]] = None,
     ) -> "Scenario":
-        """The scenario in ``text``, taken to be the file ``name``: errors name it, and
-        relative paths in the text (a mesh file) are read from its directory.
+        """The scenario in ``text``, taken to be the file ``name``: errors name it, relative
+        paths in the text (a mesh file) are read from its directory, and a run's summary
+        gives it as its input.
 
         >>> text = open("examples/cantilever.toml").read()
         >>> Scenario.from_toml(text, name="examples/cantilever.toml").check().nodes
@@ -184,7 +185,9 @@ class Scenario:
     def quick_face(cls, *, dt: Union[float, str, None] = None) -> "Scenario":
         """The default job: the sticky lips opening on the MakeHuman face at the quick
         resolution (the paper's run ``fig4_sticky``), what ``sticky-lips run`` runs with no
-        input. The face is built into the package: nothing is read from disk.
+        input. The face is built into the package: nothing is read from disk. The text
+        (:attr:`text`) stands for the file ``quick_face.toml``, which is not written: save it
+        to run the same job with the command line.
 
         Args:
             dt: the time step, seconds or ``"auto"`` (the default: from the model's
@@ -322,18 +325,18 @@ class Scenario:
         return f"Scenario({self._path!r})"
 
 
-def _items(overrides: Mapping[str, Any]) -> list:
+def _items(overrides: Mapping[str, Any]) -> List[Tuple[str, Any]]:
     if not isinstance(overrides, Mapping):
         raise TypeError(f"overrides: a mapping of dotted keys to values, not {type(overrides).__name__}")
     return [(str(k), v) for k, v in overrides.items()]
 
 
-def _tuples(d: dict) -> dict:
+def _tuples(d: Dict[str, Any]) -> Dict[str, Any]:
     return {k: tuple(v) if isinstance(v, list) else v for k, v in d.items()}
 
 
-def _progress_hook(progress: Callable[[Progress], Any]) -> Callable[[dict], None]:
-    def hook(update: dict) -> None:
+def _progress_hook(progress: Callable[[Progress], Any]) -> Callable[[Dict[str, Any]], None]:
+    def hook(update: Dict[str, Any]) -> None:
         progress(Progress(**update))
 
     return hook

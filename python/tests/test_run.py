@@ -57,7 +57,7 @@ def test_frames_are_the_frame_files(slabs_run):
 
     def array(path: Path, name: str) -> np.ndarray:
         node = next(a for a in ET.parse(path).iter("DataArray") if a.get("Name") == name)
-        raw = base64.b64decode("".join(node.text.split()))
+        raw = base64.b64decode("".join((node.text or "").split()))
         return np.frombuffer(raw[8:], dtype="<f8")
 
     last = slabs_run.frame_files[-1]
