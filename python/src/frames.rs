@@ -53,16 +53,20 @@ fn read_text(path: &Path) -> Result<String> {
 
 fn read_frame(path: &Path, with_saliva: bool) -> Result<FrameData> {
     let text = read_text(path)?;
-    let file = path.display().to_string();
+    frame_of(&text, &path.display().to_string(), with_saliva)
+}
+
+/// The displacement and saliva arrays of a frame file's text (`file` names it in errors).
+fn frame_of(text: &str, file: &str, with_saliva: bool) -> Result<FrameData> {
     let mut wanted = vec![("PointData", "displacement")];
     if with_saliva {
         wanted.extend(SALIVA.iter().map(|n| ("CellData", *n)));
     }
-    let mut arrays = vtu::parse_arrays(&text, &file, &wanted)?.into_iter();
+    let mut arrays = vtu::parse_arrays(text, file, &wanted)?.into_iter();
     let (displacement, comps, _) = arrays.next().expect("one result per array asked for")?;
     if comps != 3 {
         return Err(bad(
-            &file,
+            file,
             format!("array `displacement` has {comps} components (3 expected)"),
         ));
     }
@@ -159,7 +163,7 @@ fn read_first(path: &Path) -> Result<(ModelData, bool, FrameData)> {
         ));
     }
     let with_saliva = arrays.next().is_some_and(|a| a.is_ok());
-    let first = read_frame(path, with_saliva)?;
+    let first = frame_of(&text, &file, with_saliva)?;
     if first.displacement.len() != points.len() {
         return Err(bad(
             &file,
