@@ -21,6 +21,15 @@ True
 
 from __future__ import annotations
 
+try:
+    from . import _native  # noqa: F401
+except ImportError as e:  # pragma: no cover
+    raise ImportError(
+        f"sticky_lips: no native module beside {__file__}: this looks like the sources "
+        "(python/sticky_lips) rather than the installed package; install it with "
+        "`pip install ./python` and import it from another directory"
+    ) from e
+
 from ._face import FaceModel, face
 from ._native import VERSION as __version__
 from ._run import Measures, Progress, Run, Saliva, open_run
