@@ -151,14 +151,7 @@ struct Base {
 
 /// The spec `text` parsed; a syntax error names the line in `file`.
 fn read_spec(text: &str, file: &str) -> Result<Spec> {
-    toml::from_str(text).map_err(|e| {
-        let line = e.span().map(|r| text[..r.start].matches('\n').count() + 1);
-        Error::input(
-            file,
-            line.map_or(Location::None, Location::Line),
-            e.message(),
-        )
-    })
+    crate::io::scenario::from_toml(text, file)
 }
 
 /// The spec's directory, absolute (the current one for a bare file name).
