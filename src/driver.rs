@@ -332,34 +332,13 @@ fn run_with<S: Stepper>(
     let every = problem.time.output_every;
     let mut stepping = 0.0;
     let mut interrupted = None;
-    let write_checkpoint = |sim: &S,
-                            writer: &mut FrameWriter,
-                            history: &mut RunHistory,
-                            stepping: f64|
-     -> Result<()> {
-        let Some(hash) = &problem_hash else {
-            return Ok(());
+    let write_checkpoint =
+        |sim: &S, writer: &mut FrameWriter, history: &mut RunHistory, stepping: f64| {
+            let Some(hash) = &problem_hash else {
+                return Ok(());
+            };
+            save_checkpoint(sim, writer, history, stepping, hash, &input)
         };
-        let state = sim.checkpoint_state().expect("checked at the start");
-        history.frames = writer
-            .entries()
-            .iter()
-            .map(|e| (e.time, e.file.clone()))
-            .collect();
-        let mut header = checkpoint::Header {
-            format: checkpoint::FORMAT,
-            precision: sim.precision_name().into(),
-            problem_hash: hash.clone(),
-            input: input.clone(),
-            step: state.step,
-            num_nodes: state.u.len(),
-            num_saliva: state.broken.len(),
-            history: history.clone(),
-        };
-        // the stepping before the checkpoint, this process's included
-        header.history.stepping_time += stepping;
-        writer.checkpoint(checkpoint::encode(&header, &state))
-    };
     let report_progress = |sim: &S, frames: usize, stepping: f64| {
         if let Some(p) = &opts.progress {
             let done = sim.step_index() - start_step;
@@ -402,40 +381,17 @@ fn run_with<S: Stepper>(
         }
         report_progress(&sim, writer.frames_written(), stepping);
     }
-    let stepping = history.stepping_time + stepping;
-    let steps_here = sim.step_index() - restarted_from.unwrap_or(0);
-    let summary = RunSummary {
-        input: problem.source.clone(),
-        kind: "dynamic".into(),
-        steps: sim.step_index(),
-        simulated_time: sim.time(),
-        dt: problem.time.dt,
-        subcycles: problem.numerics.subcycles,
-        wall_time: t0.elapsed().as_secs_f64(),
-        stepping_time: stepping,
-        element_updates_per_second: (steps_here * sim.num_elements()) as f64
-            / (stepping - history.stepping_time).max(1e-12),
-        precision: sim.precision_name().into(),
-        backend: sim.backend_name(),
-        threads: rayon::current_num_threads(),
-        num_nodes: problem.mesh.nodes.len(),
-        num_elements: problem.mesh.elements.len(),
-        variant: format!("{:?}", problem.numerics.variant),
-        niftysim_timing: problem.numerics.niftysim_timing,
-        critical_time_step: report.critical_time_step,
-        stability: Some(report),
-        frames: writer.frames_written(),
-        saliva_elements: sim.disc().saliva.elements.len(),
-        broken_saliva: history.broken_saliva,
-        energy: history.energy,
-        newton_iterations: None,
-        residual_norm: None,
-        interrupted: interrupted.clone(),
+    let mut summary = dynamic_summary(
+        &sim,
+        problem,
+        report,
+        &history,
+        writer.frames_written(),
+        t0,
+        stepping,
         restarted_from,
-        shapes: Vec::new(),
-        export: None,
-    };
-    let mut summary = summary;
+    );
+    summary.interrupted = interrupted.clone();
     if let Some(m) = &history.measures {
         crate::run_dir::write_measures(&opts.out, m)?;
     }
@@ -462,6 +418,87 @@ fn run_with<S: Stepper>(
         std::fs::remove_file(&p).map_err(|e| crate::error::Error::io(&p, e))?;
     }
     Ok(summary)
+}
+
+/// Writes the checkpoint of `sim` at its step into the run's directory (through `writer`):
+/// the frames written so far recorded in `history`, `stepping` (this process's stepping
+/// time) added to the history's, `hash` the problem's and `input` the run's input.
+fn save_checkpoint<S: Stepper>(
+    sim: &S,
+    writer: &mut FrameWriter,
+    history: &mut RunHistory,
+    stepping: f64,
+    hash: &str,
+    input: &str,
+) -> Result<()> {
+    let state = sim.checkpoint_state().expect("checked at the start");
+    history.frames = writer
+        .entries()
+        .iter()
+        .map(|e| (e.time, e.file.clone()))
+        .collect();
+    let mut header = checkpoint::Header {
+        format: checkpoint::FORMAT,
+        precision: sim.precision_name().into(),
+        problem_hash: hash.to_string(),
+        input: input.to_string(),
+        step: state.step,
+        num_nodes: state.u.len(),
+        num_saliva: state.broken.len(),
+        history: history.clone(),
+    };
+    // the stepping before the checkpoint, this process's included
+    header.history.stepping_time += stepping;
+    writer.checkpoint(checkpoint::encode(&header, &state))
+}
+
+/// The summary of a dynamic run of `sim` that has written `frames` frames, not interrupted:
+/// `history` the run's (a restarted run's from its start), `stepping` this process's stepping
+/// time, `t0` when the run began, `restarted_from` the step it restarted from.
+#[allow(clippy::too_many_arguments)]
+fn dynamic_summary<S: Stepper>(
+    sim: &S,
+    problem: &Problem,
+    report: crate::tled::stability::StabilityReport,
+    history: &RunHistory,
+    frames: usize,
+    t0: Instant,
+    stepping: f64,
+    restarted_from: Option<usize>,
+) -> RunSummary {
+    let stepping = history.stepping_time + stepping;
+    let steps_here = sim.step_index() - restarted_from.unwrap_or(0);
+    RunSummary {
+        input: problem.source.clone(),
+        kind: "dynamic".into(),
+        steps: sim.step_index(),
+        simulated_time: sim.time(),
+        dt: problem.time.dt,
+        subcycles: problem.numerics.subcycles,
+        wall_time: t0.elapsed().as_secs_f64(),
+        stepping_time: stepping,
+        element_updates_per_second: (steps_here * sim.num_elements()) as f64
+            / (stepping - history.stepping_time).max(1e-12),
+        precision: sim.precision_name().into(),
+        backend: sim.backend_name(),
+        threads: rayon::current_num_threads(),
+        num_nodes: problem.mesh.nodes.len(),
+        num_elements: problem.mesh.elements.len(),
+        variant: format!("{:?}", problem.numerics.variant),
+        niftysim_timing: problem.numerics.niftysim_timing,
+        critical_time_step: report.critical_time_step,
+        stability: Some(report),
+        frames,
+        saliva_elements: sim.disc().saliva.elements.len(),
+        broken_saliva: history.broken_saliva.clone(),
+        energy: history.energy.clone(),
+        newton_iterations: None,
+        residual_norm: None,
+        interrupted: None,
+        restarted_from,
+        shapes: Vec::new(),
+        export: None,
+    }
 }
 
 /// Records the state as a frame: energies, broken saliva count, lip measures, the VTU file.

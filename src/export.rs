@@ -122,14 +122,14 @@ pub fn export(skin: &Skin, dir: &Path) -> Result<ExportSummary> {
     export_with(skin, dir, &crate::control::CancelToken::new())
 }
 
-/// [`export`], stopped by `cancel` between two frames (nothing is written then).
-pub fn export_with(
-    skin: &Skin,
-    dir: &Path,
-    cancel: &crate::control::CancelToken,
-) -> Result<ExportSummary> {
-    let t0 = std::time::Instant::now();
-    let entries = read_pvd(dir)?;
+/// A position as the files hold it.
+fn to32(p: [f64; 3]) -> [f32; 3] {
+    p.map(|x| x as f32)
+}
+
+/// Refuses frames `entries` (of `dir`'s `frames.pvd`) that are none or not in time order:
+/// the files hold one sample per frame in time order.
+fn check_frames_listed(entries: &[(f64, String)], dir: &Path) -> Result<()> {
     if entries.is_empty() {
         return Err(Error::input(
             dir.join("frames.pvd").display().to_string(),
@@ -150,14 +150,39 @@ pub fn export_with(
             ));
         }
     }
-    let to32 = |p: [f64; 3]| p.map(|x| x as f32);
+    Ok(())
+}
+
+/// The frames as the files hold them ([`read_frames`]), in the user's units and axes.
+struct Frames {
+    /// The skin's vertices in each frame.
+    skin: Vec<Vec<[f32; 3]>>,
+    /// The saliva layer: the model quads whose element is a saliva element (from the first
+    /// frame's `saliva_broken`; none if it has none).
+    saliva_quads: Vec<usize>,
+    /// In each frame: the model surface's vertices, and each saliva quad's `broken` and
+    /// `moisture`.
+    saliva_pts: Vec<Vec<[f32; 3]>>,
+    broken: Vec<Vec<f32>>,
+    moisture: Vec<Vec<f32>>,
+}
+
+/// Reads frames `entries` of `dir`: each frame's displacements (checked) carried onto the
+/// skin, and the saliva layer's state. Stopped by `cancel` before each frame.
+fn read_frames(
+    skin: &Skin,
+    dir: &Path,
+    entries: &[(f64, String)],
+    cancel: &crate::control::CancelToken,
+) -> Result<Frames> {
     let fr = &skin.frame;
-    let mut frames: Vec<Vec<[f32; 3]>> = Vec::with_capacity(entries.len());
-    let mut saliva_pts: Vec<Vec<[f32; 3]>> = Vec::with_capacity(entries.len());
-    let mut broken: Vec<Vec<f32>> = Vec::new();
-    let mut moisture: Vec<Vec<f32>> = Vec::new();
-    let mut saliva_quads: Vec<usize> = Vec::new();
-    let times: Vec<f64> = entries.iter().map(|e| e.0).collect();
+    let mut out = Frames {
+        skin: Vec::with_capacity(entries.len()),
+        saliva_quads: Vec::new(),
+        saliva_pts: Vec::with_capacity(entries.len()),
+        broken: Vec::new(),
+        moisture: Vec::new(),
+    };
     let need = skin.max_node().map_or(0, |n| n as usize + 1);
     for (k, (t, file)) in entries.iter().enumerate() {
         cancel.check(|| {
@@ -167,53 +192,36 @@ pub fn export_with(
             )
         })?;
         let path = dir.join(file);
-        let (u, comps, n) = crate::io::vtu::read_point_data_f64(&path, "displacement")?;
-        if comps != 3 || n < need.max(skin.model.vertices.len()) {
-            return Err(Error::input(
-                path.display().to_string(),
-                Location::Field("displacement".into()),
-                format!(
-                    "has {n} points of {comps} components; the model has {} surface nodes",
-                    skin.model.vertices.len()
-                ),
-            ));
-        }
-        if let Some(i) = u.iter().position(|x| !x.is_finite()) {
-            return Err(Error::input(
-                path.display().to_string(),
-                Location::Field(format!("point data `displacement`, point {}", i / 3)),
-                "is not finite: a frame of a run that diverged? (nothing was written)",
-            ));
-        }
-        let u: Vec<[f64; 3]> = u.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-        frames.push(skin.positions(&u, *t).into_iter().map(to32).collect());
+        let u = read_displacement(skin, &path, need)?;
+        out.skin
+            .push(skin.positions(&u, *t).into_iter().map(to32).collect());
         // the saliva layer: the model quads whose element is a saliva element
         let state = crate::io::vtu::read_cell_data(&path, "saliva_broken").ok();
         if k == 0 {
             if let Some((b, _, _)) = &state {
-                saliva_quads = (0..skin.model.quads.len().min(b.len()))
+                out.saliva_quads = (0..skin.model.quads.len().min(b.len()))
                     .filter(|&q| b[q] >= 0.0)
                     .collect();
             }
         }
-        if !saliva_quads.is_empty() {
+        if !out.saliva_quads.is_empty() {
             let b = state.map(|s| s.0).unwrap_or_default();
             let m = crate::io::vtu::read_cell_data(&path, "saliva_moisture")
                 .map(|s| s.0)
                 .unwrap_or_default();
-            broken.push(
-                saliva_quads
+            out.broken.push(
+                out.saliva_quads
                     .iter()
                     .map(|&q| b.get(q).copied().unwrap_or(0.0) as f32)
                     .collect(),
             );
-            moisture.push(
-                saliva_quads
+            out.moisture.push(
+                out.saliva_quads
                     .iter()
                     .map(|&q| m.get(q).copied().unwrap_or(f64::NAN) as f32)
                     .collect(),
             );
-            saliva_pts.push(
+            out.saliva_pts.push(
                 skin.model
                     .vertices
                     .iter()
@@ -223,16 +231,40 @@ pub fn export_with(
             );
         }
     }
-    let read_seconds = t0.elapsed().as_secs_f64();
-    let t1 = std::time::Instant::now();
-    // the rest mesh in the user's units and axes
-    let mut rest = skin.surface.clone();
-    for v in rest.vertices.iter_mut() {
-        *v = fr.to_user(*v);
+    Ok(out)
+}
+
+/// The nodal displacements of frame file `path`; fails unless they are 3 components at
+/// `need` points or more (and as many as the model's surface nodes), all finite.
+fn read_displacement(skin: &Skin, path: &Path, need: usize) -> Result<Vec<[f64; 3]>> {
+    let (u, comps, n) = crate::io::vtu::read_point_data_f64(path, "displacement")?;
+    if comps != 3 || n < need.max(skin.model.vertices.len()) {
+        return Err(Error::input(
+            path.display().to_string(),
+            Location::Field("displacement".into()),
+            format!(
+                "has {n} points of {comps} components; the model has {} surface nodes",
+                skin.model.vertices.len()
+            ),
+        ));
     }
-    let rest32: Vec<[f32; 3]> = rest.vertices.iter().map(|&p| to32(p)).collect();
+    if let Some(i) = u.iter().position(|x| !x.is_finite()) {
+        return Err(Error::input(
+            path.display().to_string(),
+            Location::Field(format!("point data `displacement`, point {}", i / 3)),
+            "is not finite: a frame of a run that diverged? (nothing was written)",
+        ));
+    }
+    Ok(u.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+}
+
+/// `skin.usda`'s text: the skin (`rest32`, its rest positions as the files hold them) and the
+/// saliva layer's front faces with their state, a time sample per frame at `times`.
+fn usda(skin: &Skin, rest32: &[[f32; 3]], frames: Frames, times: &[f64]) -> String {
+    let fr = &skin.frame;
     let faces: &[Vec<u32>] = &skin.surface.faces;
-    let saliva_faces: Vec<Vec<u32>> = saliva_quads
+    let saliva_faces: Vec<Vec<u32>> = frames
+        .saliva_quads
         .iter()
         .map(|&q| skin.model.quads[q].to_vec())
         .collect();
@@ -260,8 +292,8 @@ pub fn export_with(
     let mut meshes = vec![UsdMesh {
         name: "skin",
         faces,
-        rest: &rest32,
-        frames: &frames,
+        rest: rest32,
+        frames: &frames.skin,
         uv: uv32.as_deref(),
         face_data: vec![],
     }];
@@ -270,31 +302,57 @@ pub fn export_with(
             name: "saliva",
             faces: &saliva_faces,
             rest: &model_rest,
-            frames: &saliva_pts,
+            frames: &frames.saliva_pts,
             uv: None,
-            face_data: vec![("broken", broken), ("moisture", moisture)],
+            face_data: vec![("broken", frames.broken), ("moisture", frames.moisture)],
         });
     }
     let doc = format!(
         "sticky-lips run: {} ({} frames, time code k = frame k, {} per simulated second)",
         skin.name,
-        frames.len(),
+        frames.skin.len(),
         fps
     );
-    let usda = usda_text(&UsdLayer {
+    usda_text(&UsdLayer {
         doc: &doc,
         up_axis,
         metres_per_unit: fr.scale,
         frames_per_second: fps,
         meshes,
-    });
+    })
+}
+
+/// [`export`], stopped by `cancel` between two frames (nothing is written then).
+pub fn export_with(
+    skin: &Skin,
+    dir: &Path,
+    cancel: &crate::control::CancelToken,
+) -> Result<ExportSummary> {
+    let t0 = std::time::Instant::now();
+    let entries = read_pvd(dir)?;
+    check_frames_listed(&entries, dir)?;
+    let fr = &skin.frame;
+    let times: Vec<f64> = entries.iter().map(|e| e.0).collect();
+    let frames = read_frames(skin, dir, &entries, cancel)?;
+    let read_seconds = t0.elapsed().as_secs_f64();
+    let t1 = std::time::Instant::now();
+    // the rest mesh in the user's units and axes
+    let mut rest = skin.surface.clone();
+    for v in rest.vertices.iter_mut() {
+        *v = fr.to_user(*v);
+    }
+    let rest32: Vec<[f32; 3]> = rest.vertices.iter().map(|&p| to32(p)).collect();
+    let (n_frames, saliva_faces) = (frames.skin.len(), frames.saliva_quads.len());
+    let pc2 = pc2_bytes(&frames.skin, 0.0);
+    let mdd = mdd_bytes(&frames.skin, &times);
+    let usda = usda(skin, &rest32, frames, &times);
     let mut obj = Vec::new();
     crate::io::obj::write_polygons_to(&mut obj, &rest)
         .map_err(|e| Error::io(dir.join("skin.obj"), e))?;
     let files: [(&str, Vec<u8>); 4] = [
         ("skin.obj", obj),
-        ("skin.pc2", pc2_bytes(&frames, 0.0)),
-        ("skin.mdd", mdd_bytes(&frames, &times)),
+        ("skin.pc2", pc2),
+        ("skin.mdd", mdd),
         ("skin.usda", usda.into_bytes()),
     ];
     cancel.check(|| {
@@ -305,10 +363,10 @@ pub fn export_with(
         crate::io::atomic::write_atomic(&p, bytes).map_err(|e| Error::io(&p, e))?;
     }
     let summary = ExportSummary {
-        frames: frames.len(),
+        frames: n_frames,
         vertices: rest.vertices.len(),
         tied: skin.counts,
-        saliva_faces: saliva_faces.len(),
+        saliva_faces,
         skin_is_model: skin.surface.vertices == skin.model.vertices,
         files: files.iter().map(|f| f.0.to_string()).collect(),
         read_seconds,

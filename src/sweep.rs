@@ -136,39 +136,46 @@ pub fn plan(text: &str, spec_path: &Path, exe: &Path) -> Result<Plan> {
     plan_with_dt(text, spec_path, exe, None)
 }
 
-/// [`plan`] with the runs' time step `dt` where given (`sweep --dt`), before the spec's.
-pub fn plan_with_dt(
-    text: &str,
-    spec_path: &Path,
-    exe: &Path,
-    dt: Option<crate::io::scenario::DtChoice>,
-) -> Result<Plan> {
-    use crate::io::scenario::{with_dt, DtChoice, DtDef};
-    let file = spec_path.display().to_string();
-    let spec: Spec = toml::from_str(text).map_err(|e| {
-        let line = e.span().map(|r| text[..r.start].matches('\n').count() + 1);
-        Error::input(
-            &file,
-            line.map_or(Location::None, Location::Line),
-            e.message(),
-        )
-    })?;
+/// A run of the sweep before its scenario is built: its name and its overrides.
+type Run = (String, BTreeMap<String, toml::Value>);
+
+/// The base scenario ([`base_scenario`]).
+struct Base {
+    /// Its text.
+    text: String,
+    /// Its name in messages: its path, or `the default job`.
+    name: String,
+    /// The directory its relative file names are relative to.
+    dir: PathBuf,
+}
+
+/// The spec `text` parsed; a syntax error names the line in `file`.
+fn read_spec(text: &str, file: &str) -> Result<Spec> {
+    crate::io::scenario::from_toml(text, file)
+}
+
+/// The spec's directory, absolute (the current one for a bare file name).
+fn spec_dir(spec_path: &Path) -> Result<PathBuf> {
     let spec_dir = spec_path
         .parent()
         .map(Path::to_path_buf)
         .unwrap_or_default();
-    let spec_dir = std::fs::canonicalize(if spec_dir.as_os_str().is_empty() {
+    std::fs::canonicalize(if spec_dir.as_os_str().is_empty() {
         Path::new(".")
     } else {
         &spec_dir
     })
-    .map_err(|e| Error::io(&spec_dir, e))?;
-    // the base scenario's text and the directory its relative files are in
-    let (base_text, base_name, base_dir) = match &spec.base {
+    .map_err(|e| Error::io(&spec_dir, e))
+}
+
+/// The base scenario: the file the spec names (relative to `spec_dir`), or the default job's
+/// (Table 1 on the MakeHuman face at the quick resolution, its files relative to `spec_dir`).
+fn base_scenario(base: Option<&str>, spec_dir: &Path, file: &str) -> Result<Base> {
+    let (text, name, dir) = match base {
         Some(b) => {
             let p = spec_dir.join(b);
             let t = std::fs::read_to_string(&p)
-                .map_err(|e| err(&file, "base", format!("{}: {e}", p.display())))?;
+                .map_err(|e| err(file, "base", format!("{}: {e}", p.display())))?;
             let dir = p.parent().map(Path::to_path_buf).unwrap_or_default();
             (t, p.display().to_string(), dir)
         }
@@ -176,15 +183,26 @@ pub fn plan_with_dt(
             use crate::paper::{scenario_of, spec as paper_spec, Model};
             let run = paper_spec(Model::Face, true, "fig4_sticky").expect("the paper's run");
             let (t, _) = scenario_of(Model::Face, true, &run, Path::new("default job"))?;
-            (t, "the default job".to_string(), spec_dir.clone())
+            (t, "the default job".to_string(), spec_dir.to_path_buf())
         }
     };
-    let dt = match (dt, spec.dt) {
+    Ok(Base { text, name, dir })
+}
+
+/// The runs' time step: `dt` (`sweep --dt`) where given, else the spec's, else `"auto"` for
+/// the default job (as `run` without an input); `None`: the base's own.
+fn runs_dt(
+    dt: Option<crate::io::scenario::DtChoice>,
+    spec: &Spec,
+    file: &str,
+) -> Result<Option<crate::io::scenario::DtChoice>> {
+    use crate::io::scenario::{DtChoice, DtDef};
+    Ok(match (dt, spec.dt) {
         (Some(d), _) => Some(d),
         (None, Some(DtDef::Seconds(x))) if x.is_finite() && x > 0.0 => Some(DtChoice::Seconds(x)),
         (None, Some(DtDef::Seconds(x))) => {
             return Err(err(
-                &file,
+                file,
                 "dt",
                 format!("must be positive and finite, got {x}"),
             ))
@@ -193,12 +211,13 @@ pub fn plan_with_dt(
         // the default job at dt = "auto", as `run` without an input
         (None, None) if spec.base.is_none() => Some(DtChoice::Auto),
         (None, None) => None,
-    };
-    let base_text = match dt {
-        Some(d) => with_dt(&base_text, &base_name, d)?,
-        None => base_text,
-    };
-    let out = match &spec.out {
+    })
+}
+
+/// Where the runs go: the spec's `out` (relative to `spec_dir`), else `out/<spec name>` in
+/// the current directory.
+fn out_dir(out: Option<&str>, spec_dir: &Path, spec_path: &Path) -> Result<PathBuf> {
+    Ok(match out {
         Some(d) => spec_dir.join(d),
         None => std::env::current_dir()
             .map_err(|e| Error::io(".", e))?
@@ -208,15 +227,20 @@ pub fn plan_with_dt(
                     .file_stem()
                     .map_or("sweep".into(), |s| s.to_string_lossy().to_string()),
             ),
-    };
+    })
+}
+
+/// Threads per run (default 1, at most [`crate::io::args::max_threads`]) and runs at once
+/// (default: cores / threads), checked.
+fn threads_and_jobs(spec: &Spec, file: &str) -> Result<(usize, usize)> {
     let threads = spec.threads.unwrap_or(1);
     if threads == 0 {
-        return Err(err(&file, "threads", "must be at least 1"));
+        return Err(err(file, "threads", "must be at least 1"));
     }
     let max = crate::io::args::max_threads();
     if threads > max {
         return Err(err(
-            &file,
+            file,
             "threads",
             format!("{threads} per run: at most {max} (four per CPU of this machine)"),
         ));
@@ -224,18 +248,23 @@ pub fn plan_with_dt(
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let jobs_at_once = spec.jobs.unwrap_or((cores / threads).max(1));
     if jobs_at_once == 0 {
-        return Err(err(&file, "jobs", "must be at least 1"));
+        return Err(err(file, "jobs", "must be at least 1"));
     }
-    // the runs: the grid's combinations, then the shots
-    let mut runs: Vec<(String, BTreeMap<String, toml::Value>)> = Vec::new();
-    let keys: Vec<&String> = spec.grid.keys().collect();
+    Ok((threads, jobs_at_once))
+}
+
+/// The grid's combinations, the last key varying fastest, each named by its index and its
+/// values. Fails if a key lists no values or the combinations are more than [`MAX_RUNS`].
+fn grid_runs(grid: &BTreeMap<String, Vec<toml::Value>>, file: &str) -> Result<Vec<Run>> {
+    let mut runs = Vec::new();
+    let keys: Vec<&String> = grid.keys().collect();
     for k in &keys {
-        if spec.grid[*k].is_empty() {
-            return Err(err(&file, format!("grid.{k}"), "lists no values"));
+        if grid[*k].is_empty() {
+            return Err(err(file, format!("grid.{k}"), "lists no values"));
         }
     }
     if !keys.is_empty() {
-        let sizes: Vec<usize> = keys.iter().map(|k| spec.grid[*k].len()).collect();
+        let sizes: Vec<usize> = keys.iter().map(|k| grid[*k].len()).collect();
         // checked: a product that overflows is more runs than allowed, not a small number
         let total = sizes
             .iter()
@@ -248,7 +277,7 @@ pub fn plan_with_dt(
                 .collect::<Vec<_>>()
                 .join(" x ");
             return Err(err(
-                &file,
+                file,
                 "grid",
                 format!("gives {shape} runs (at most {MAX_RUNS})"),
             ));
@@ -258,7 +287,7 @@ pub fn plan_with_dt(
             let mut set = BTreeMap::new();
             let mut name = Vec::new();
             for (k, n) in keys.iter().zip(&sizes).rev() {
-                let v = spec.grid[*k][rest % n].clone();
+                let v = grid[*k][rest % n].clone();
                 rest /= n;
                 let short = k.rsplit('.').next().unwrap_or(k);
                 name.push(format!("{short}-{}", tag(&v)));
@@ -268,7 +297,14 @@ pub fn plan_with_dt(
             runs.push((format!("{i:03}_{}", name.join("_")), set));
         }
     }
-    for (i, s) in spec.shot.iter().enumerate() {
+    Ok(runs)
+}
+
+/// The shots as runs. Fails if a name is not a plain directory name or is one of the sweep's
+/// own files.
+fn shot_runs(shots: &[Shot], file: &str) -> Result<Vec<Run>> {
+    let mut runs = Vec::new();
+    for (i, s) in shots.iter().enumerate() {
         // a name becomes a directory, a line of jobs.txt and a comment in the scenario: letters,
         // digits, `.`, `_` and `-` only (no newline, quote or path), not the sweep's own files
         let plain = !s.name.is_empty()
@@ -279,7 +315,7 @@ pub fn plan_with_dt(
                 .all(|c| c.is_ascii_alphanumeric() || "._-".contains(c));
         if !plain {
             return Err(err(
-                &file,
+                file,
                 format!("shot[{i}].name"),
                 format!(
                     "{:?} must be a plain directory name: 1 to 100 of A-Z a-z 0-9 . _ -, not \
@@ -290,13 +326,18 @@ pub fn plan_with_dt(
         }
         if RESERVED.contains(&s.name.as_str()) {
             return Err(err(
-                &file,
+                file,
                 format!("shot[{i}].name"),
                 format!("`{}` is a file of the sweep itself", s.name),
             ));
         }
         runs.push((s.name.clone(), s.set.clone()));
     }
+    Ok(runs)
+}
+
+/// Checks the override keys of the grid's, then of the shots'.
+fn check_keys(spec: &Spec, file: &str) -> Result<()> {
     // override keys are paths into the scenario; they are written into each scenario's
     // first line, so they too are plain
     let plain_key = |k: &str| {
@@ -313,81 +354,128 @@ pub fn plan_with_dt(
     ) {
         if !plain_key(key) {
             return Err(err(
-                &file,
+                file,
                 field,
                 "a key is a path of names and indices: A-Z a-z 0-9 _ - joined by .",
             ));
         }
     }
+    Ok(())
+}
+
+/// Checks that there are runs, each with a name of its own, and that the paths written into
+/// job lines and comments (`out`, the base's, the spec's) hold no control character.
+fn check_runs_and_paths(runs: &[Run], out: &Path, base_name: &str, file: &str) -> Result<()> {
     if runs.is_empty() {
-        return Err(err(&file, "grid", "the spec has neither a grid nor shots"));
+        return Err(err(file, "grid", "the spec has neither a grid nor shots"));
     }
     let mut seen = std::collections::BTreeSet::new();
-    for (n, _) in &runs {
+    for (n, _) in runs {
         if !seen.insert(n.clone()) {
-            return Err(err(&file, "shot", format!("two runs are called `{n}`")));
+            return Err(err(file, "shot", format!("two runs are called `{n}`")));
         }
     }
     // paths go into job lines and comments one line each: no control characters
     for (field, path) in [
         ("out", out.display().to_string()),
-        ("base", base_name.clone()),
-        ("spec", file.clone()),
+        ("base", base_name.to_string()),
+        ("spec", file.to_string()),
     ] {
         if path.chars().any(char::is_control) {
             return Err(err(
-                &file,
+                file,
                 field,
                 format!("{path:?} holds a control character (a newline?)"),
             ));
         }
     }
-    // every scenario is built and checked before anything is written
-    let mut jobs = Vec::new();
-    for (name, set) in &runs {
-        let dir = out.join(name);
-        let refs: Vec<(&str, toml::Value)> =
-            set.iter().map(|(k, v)| (k.as_str(), v.clone())).collect();
-        let t = with_overrides(&base_text, &base_name, &refs)?;
-        let mut doc: toml::Value = toml::from_str(&t)
-            .map_err(|e| Error::input(&base_name, Location::None, e.message()))?;
-        absolute_files(&mut doc, &base_dir);
-        let t = format!(
-            "# sticky-lips sweep {file}, run {name}: {base_name} with {}\n{}",
-            if set.is_empty() {
-                "no changes".to_string()
-            } else {
-                set.iter()
-                    .map(|(k, v)| format!("{k} = {v}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            },
-            toml::to_string(&doc).expect("a TOML value serialises")
-        );
-        let path = dir.join("scenario.toml");
-        crate::io::scenario::parse(&t, &path)
-            .map_err(|e| err(&file, format!("run {name}"), e.to_string()))?;
-        let command = vec![
-            exe.display().to_string(),
-            "run".into(),
-            path.display().to_string(),
-            "--out".into(),
-            dir.display().to_string(),
-            "--threads".into(),
-            threads.to_string(),
-            "--quiet".into(),
-        ];
-        jobs.push(Job {
-            name: name.clone(),
-            overrides: set.clone(),
-            dir,
-            command,
-            scenario: t,
-        });
+    Ok(())
+}
+
+/// The job of run `name` with overrides `set`: its scenario (the base with the overrides and
+/// its relative file names absolute, under a comment naming the sweep, the run and the
+/// overrides), parsed as `run` would parse it in `out/name`, and its command (`exe`,
+/// `threads` threads). A bad scenario's error names the run.
+fn job(
+    name: &str,
+    set: &BTreeMap<String, toml::Value>,
+    base: &Base,
+    out: &Path,
+    exe: &Path,
+    threads: usize,
+    file: &str,
+) -> Result<Job> {
+    let (base_text, base_name) = (&base.text, &base.name);
+    let dir = out.join(name);
+    let refs: Vec<(&str, toml::Value)> = set.iter().map(|(k, v)| (k.as_str(), v.clone())).collect();
+    let t = with_overrides(base_text, base_name, &refs)?;
+    let mut doc: toml::Value =
+        toml::from_str(&t).map_err(|e| Error::input(base_name, Location::None, e.message()))?;
+    absolute_files(&mut doc, &base.dir);
+    let t = format!(
+        "# sticky-lips sweep {file}, run {name}: {base_name} with {}\n{}",
+        if set.is_empty() {
+            "no changes".to_string()
+        } else {
+            set.iter()
+                .map(|(k, v)| format!("{k} = {v}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        },
+        toml::to_string(&doc).expect("a TOML value serialises")
+    );
+    let path = dir.join("scenario.toml");
+    crate::io::scenario::parse(&t, &path)
+        .map_err(|e| err(file, format!("run {name}"), e.to_string()))?;
+    let command = vec![
+        exe.display().to_string(),
+        "run".into(),
+        path.display().to_string(),
+        "--out".into(),
+        dir.display().to_string(),
+        "--threads".into(),
+        threads.to_string(),
+        "--quiet".into(),
+    ];
+    Ok(Job {
+        name: name.to_string(),
+        overrides: set.clone(),
+        dir,
+        command,
+        scenario: t,
+    })
+}
+
+/// [`plan`] with the runs' time step `dt` where given (`sweep --dt`), before the spec's.
+pub fn plan_with_dt(
+    text: &str,
+    spec_path: &Path,
+    exe: &Path,
+    dt: Option<crate::io::scenario::DtChoice>,
+) -> Result<Plan> {
+    let file = spec_path.display().to_string();
+    let spec = read_spec(text, &file)?;
+    let spec_dir = spec_dir(spec_path)?;
+    // the base scenario's text and the directory its relative files are in
+    let mut base = base_scenario(spec.base.as_deref(), &spec_dir, &file)?;
+    if let Some(d) = runs_dt(dt, &spec, &file)? {
+        base.text = crate::io::scenario::with_dt(&base.text, &base.name, d)?;
     }
+    let out = out_dir(spec.out.as_deref(), &spec_dir, spec_path)?;
+    let (threads, jobs_at_once) = threads_and_jobs(&spec, &file)?;
+    // the runs: the grid's combinations, then the shots
+    let mut runs = grid_runs(&spec.grid, &file)?;
+    runs.extend(shot_runs(&spec.shot, &file)?);
+    check_keys(&spec, &file)?;
+    check_runs_and_paths(&runs, &out, &base.name, &file)?;
+    // every scenario is built and checked before anything is written
+    let jobs = runs
+        .iter()
+        .map(|(name, set)| job(name, set, &base, &out, exe, threads, &file))
+        .collect::<Result<Vec<Job>>>()?;
     Ok(Plan {
         file,
-        base_name,
+        base_name: base.name,
         out,
         threads,
         jobs_at_once,

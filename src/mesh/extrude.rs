@@ -233,22 +233,13 @@ pub fn check_topology(surface: &QuadSurface, file: &str) -> Result<()> {
     Ok(())
 }
 
-/// Extrudes with the given offset [`Direction`] (see the module docs).
-pub fn extrude_with(
+/// Each group's thickness (m); fails where a group with quads has one that is not positive
+/// and finite.
+fn group_thicknesses(
     surface: &QuadSurface,
     thickness: &dyn Fn(usize) -> f64,
-    direction: Direction,
     file: &str,
-) -> Result<Mesh> {
-    surface.validate(file)?;
-    if surface.quads.is_empty() {
-        return Err(Error::input(
-            file,
-            Location::None,
-            "the surface has no quads",
-        ));
-    }
-    check_topology(surface, file)?;
+) -> Result<Vec<f64>> {
     let ng = surface.groups.len();
     let mut has_quads = vec![false; ng];
     for &g in &surface.group_of_quad {
@@ -264,7 +255,13 @@ pub fn extrude_with(
             ));
         }
     }
-    let fixed = match direction {
+    Ok(tg)
+}
+
+/// The fixed direction's unit vector (`None` for [`Direction::Normal`]); fails for a
+/// direction that is zero or not finite.
+fn unit_direction(direction: Direction, file: &str) -> Result<Option<[f64; 3]>> {
+    Ok(match direction {
         Direction::Normal => None,
         Direction::Fixed(d) => {
             let n = norm(&d);
@@ -277,11 +274,28 @@ pub fn extrude_with(
             }
             Some([d[0] / n, d[1] / n, d[2] / n])
         }
-    };
+    })
+}
 
+/// Per vertex of a surface: the sum of its quads' area vectors, and of their thicknesses,
+/// and their count ([`vertex_sums`]).
+struct VertexSums {
+    normal: Vec<[f64; 3]>,
+    tsum: Vec<f64>,
+    count: Vec<u32>,
+}
+
+impl VertexSums {
+    /// Vertex `i`'s offset: the mean thickness of its quads.
+    fn offset(&self, i: usize) -> f64 {
+        self.tsum[i] / self.count[i] as f64
+    }
+}
+
+/// Area-weighted normals and mean thickness (group thicknesses `tg`), per vertex.
+fn vertex_sums(surface: &QuadSurface, tg: &[f64]) -> VertexSums {
     let nv = surface.vertices.len();
     let v = &surface.vertices;
-    // Area-weighted normals and mean thickness, per vertex.
     let mut normal = vec![[0.0f64; 3]; nv];
     let mut tsum = vec![0.0f64; nv];
     let mut count = vec![0u32; nv];
@@ -297,25 +311,32 @@ pub fn extrude_with(
             count[i as usize] += 1;
         }
     }
-    // Renumber the used vertices.
-    let mut node_of = vec![u32::MAX; nv];
-    let mut used: Vec<u32> = Vec::with_capacity(nv);
-    for i in 0..nv {
-        if count[i] > 0 {
-            node_of[i] = used.len() as u32;
-            used.push(i as u32);
-        }
+    VertexSums {
+        normal,
+        tsum,
+        count,
     }
-    let nu = used.len();
-    let mut nodes = Vec::with_capacity(2 * nu);
+}
+
+/// The nodes: the used vertices (`used`, in order), then each offset by its mean thickness
+/// along `fixed`, or against its area-weighted normal. Fails where a vertex has no normal.
+fn extruded_nodes(
+    surface: &QuadSurface,
+    sums: &VertexSums,
+    used: &[u32],
+    fixed: Option<[f64; 3]>,
+    file: &str,
+) -> Result<Vec<[f64; 3]>> {
+    let v = &surface.vertices;
+    let mut nodes = Vec::with_capacity(2 * used.len());
     nodes.extend(used.iter().map(|&i| v[i as usize]));
-    for &i in &used {
+    for &i in used {
         let i = i as usize;
-        let t = tsum[i] / count[i] as f64;
+        let t = sums.offset(i);
         let d = match fixed {
             Some(d) => d,
             None => {
-                let n = normal[i];
+                let n = sums.normal[i];
                 let l = norm(&n);
                 if !(l > 0.0) || !l.is_finite() {
                     let q = surface
@@ -338,59 +359,70 @@ pub fn extrude_with(
         let x = v[i];
         nodes.push([x[0] + t * d[0], x[1] + t * d[1], x[2] + t * d[2]]);
     }
-    let elements: Vec<[u32; 8]> = surface
-        .quads
-        .iter()
-        .map(|q| {
-            let [a, b, c, d] = q.map(|i| node_of[i as usize]);
-            let o = nu as u32;
-            [a, d, c, b, a + o, d + o, c + o, b + o]
-        })
-        .collect();
-    let bad = elements.par_iter().position_first(|conn| {
-        let x: [[f64; 3]; 8] = std::array::from_fn(|k| nodes[conn[k] as usize]);
-        !(hex8::min_corner_jacobian(&x).0 > 0.0)
-    });
-    if let Some(q) = bad {
-        let conn = &elements[q];
-        let x: [[f64; 3]; 8] = std::array::from_fn(|k| nodes[conn[k] as usize]);
-        let (dmin, at) = hex8::min_corner_jacobian(&x);
-        let g = surface.group_of_quad[q] as usize;
-        let quad = surface.quads[q];
-        let ts: Vec<String> = quad
-            .iter()
-            .map(|&i| format!("{:.4e}", tsum[i as usize] / count[i as usize] as f64))
-            .collect();
-        let why = match fixed {
-            Some(d) => {
-                let a = quad_area_vector(quad.map(|i| &v[i as usize]));
-                if dot(&a, &d) >= 0.0 {
-                    format!(
-                        "the quad faces along the extrusion direction {d:?} (its outward normal must point against it)"
-                    )
-                } else {
-                    "the quad is too warped for this thickness".to_string()
-                }
-            }
-            None => "the thickness exceeds the local radius of curvature of the surface (a convex bump \
-                     thinner than the thickness), or the quad is strongly warped; use a smaller thickness \
-                     or a fixed extrusion direction"
-                .to_string(),
-        };
-        return Err(Error::input(
-            file,
-            surface.quad_location(q),
-            format!(
-                "extruding this quad (group `{}`, thickness {:.4e} m; offsets at its vertices {}) inverts its \
-                 hexahedron: det J = {dmin:.3e} at {}: {why}",
-                surface.groups[g],
-                tg[g],
-                ts.join(", "),
-                if at < 8 { format!("corner {at}") } else { "the centre".into() },
-            ),
-        ));
-    }
+    Ok(nodes)
+}
 
+/// The error of quad `q`, whose hexahedron (`conn`) is inverted: where and why.
+#[allow(clippy::too_many_arguments)]
+fn inverted_error(
+    surface: &QuadSurface,
+    q: usize,
+    conn: &[u32; 8],
+    nodes: &[[f64; 3]],
+    sums: &VertexSums,
+    tg: &[f64],
+    fixed: Option<[f64; 3]>,
+    file: &str,
+) -> Error {
+    let v = &surface.vertices;
+    let x: [[f64; 3]; 8] = std::array::from_fn(|k| nodes[conn[k] as usize]);
+    let (dmin, at) = hex8::min_corner_jacobian(&x);
+    let g = surface.group_of_quad[q] as usize;
+    let quad = surface.quads[q];
+    let ts: Vec<String> = quad
+        .iter()
+        .map(|&i| format!("{:.4e}", sums.offset(i as usize)))
+        .collect();
+    let why = match fixed {
+        Some(d) => {
+            let a = quad_area_vector(quad.map(|i| &v[i as usize]));
+            if dot(&a, &d) >= 0.0 {
+                format!(
+                    "the quad faces along the extrusion direction {d:?} (its outward normal must point against it)"
+                )
+            } else {
+                "the quad is too warped for this thickness".to_string()
+            }
+        }
+        None => "the thickness exceeds the local radius of curvature of the surface (a convex bump \
+                 thinner than the thickness), or the quad is strongly warped; use a smaller thickness \
+                 or a fixed extrusion direction"
+            .to_string(),
+    };
+    Error::input(
+        file,
+        surface.quad_location(q),
+        format!(
+            "extruding this quad (group `{}`, thickness {:.4e} m; offsets at its vertices {}) inverts its \
+             hexahedron: det J = {dmin:.3e} at {}: {why}",
+            surface.groups[g],
+            tg[g],
+            ts.join(", "),
+            if at < 8 { format!("corner {at}") } else { "the centre".into() },
+        ),
+    )
+}
+
+/// The mesh of `nodes` and `elements` (the surface's `used` vertices, then their offsets):
+/// the surface's texture coordinates on both layers, its quad lines, an element set per
+/// group, node sets `surface` and `inner`.
+fn extruded_mesh(
+    surface: &QuadSurface,
+    nodes: Vec<[f64; 3]>,
+    elements: Vec<[u32; 8]>,
+    used: &[u32],
+) -> Mesh {
+    let nu = used.len();
     let uv = surface.uv.as_ref().map(|uv| {
         let top: Vec<[f64; 2]> = used.iter().map(|&i| uv[i as usize]).collect();
         let mut all = top.clone();
@@ -408,7 +440,7 @@ pub fn extrude_with(
         uv,
         ..Default::default()
     };
-    let mut sets: Vec<Vec<u32>> = vec![Vec::new(); ng];
+    let mut sets: Vec<Vec<u32>> = vec![Vec::new(); surface.groups.len()];
     for (q, &g) in surface.group_of_quad.iter().enumerate() {
         sets[g as usize].push(q as u32);
     }
@@ -419,7 +451,68 @@ pub fn extrude_with(
         .insert("surface".into(), (0..nu as u32).collect());
     mesh.node_sets
         .insert("inner".into(), (nu as u32..2 * nu as u32).collect());
-    Ok(mesh)
+    mesh
+}
+
+/// Extrudes with the given offset [`Direction`] (see the module docs).
+pub fn extrude_with(
+    surface: &QuadSurface,
+    thickness: &dyn Fn(usize) -> f64,
+    direction: Direction,
+    file: &str,
+) -> Result<Mesh> {
+    surface.validate(file)?;
+    if surface.quads.is_empty() {
+        return Err(Error::input(
+            file,
+            Location::None,
+            "the surface has no quads",
+        ));
+    }
+    check_topology(surface, file)?;
+    let tg = group_thicknesses(surface, thickness, file)?;
+    let fixed = unit_direction(direction, file)?;
+
+    let nv = surface.vertices.len();
+    // Area-weighted normals and mean thickness, per vertex.
+    let sums = vertex_sums(surface, &tg);
+    // Renumber the used vertices.
+    let mut node_of = vec![u32::MAX; nv];
+    let mut used: Vec<u32> = Vec::with_capacity(nv);
+    for i in 0..nv {
+        if sums.count[i] > 0 {
+            node_of[i] = used.len() as u32;
+            used.push(i as u32);
+        }
+    }
+    let nu = used.len();
+    let nodes = extruded_nodes(surface, &sums, &used, fixed, file)?;
+    let elements: Vec<[u32; 8]> = surface
+        .quads
+        .iter()
+        .map(|q| {
+            let [a, b, c, d] = q.map(|i| node_of[i as usize]);
+            let o = nu as u32;
+            [a, d, c, b, a + o, d + o, c + o, b + o]
+        })
+        .collect();
+    let bad = elements.par_iter().position_first(|conn| {
+        let x: [[f64; 3]; 8] = std::array::from_fn(|k| nodes[conn[k] as usize]);
+        !(hex8::min_corner_jacobian(&x).0 > 0.0)
+    });
+    if let Some(q) = bad {
+        return Err(inverted_error(
+            surface,
+            q,
+            &elements[q],
+            &nodes,
+            &sums,
+            &tg,
+            fixed,
+            file,
+        ));
+    }
+    Ok(extruded_mesh(surface, nodes, elements, &used))
 }
 
 #[cfg(test)]

@@ -192,12 +192,25 @@ impl MouthGrid {
     }
 }
 
+/// The error of field `prefix` + `field` of `file`.
+fn field_error(file: &str, prefix: &str, field: &str, msg: String) -> Result<()> {
+    Err(Error::field(file, format!("{prefix}{field}"), msg))
+}
+
 impl MouthParams {
     /// Checks the parameters; errors name `file` and the field, as `prefix` + its name
     /// (`mesh.mouth.` in a scenario).
     pub fn validate(&self, file: &str, prefix: &str) -> Result<()> {
-        let err =
-            |field: &str, msg: String| Err(Error::field(file, format!("{prefix}{field}"), msg));
+        self.check_values(file, prefix)?;
+        self.check_proportions(file, prefix)?;
+        self.check_lips(file, prefix)?;
+        self.check_levels(file, prefix)
+    }
+
+    /// Checks that every value is finite, the sizes positive, the protrusions and the muscles'
+    /// strength not negative.
+    fn check_values(&self, file: &str, prefix: &str) -> Result<()> {
+        let err = |field: &str, msg: String| field_error(file, prefix, field, msg);
         let positive = [
             ("mouth_width", self.mouth_width),
             ("face_width", self.face_width),
@@ -241,6 +254,13 @@ impl MouthParams {
                 format!("must be finite, got {:?}", self.hinge_point),
             );
         }
+        Ok(())
+    }
+
+    /// Checks the mouth's width and the face's radius against the face's width, the grid's
+    /// least sizes, and the model's size against the memory.
+    fn check_proportions(&self, file: &str, prefix: &str) -> Result<()> {
+        let err = |field: &str, msg: String| field_error(file, prefix, field, msg);
         if self.mouth_width >= 0.9 * self.face_width {
             return err(
                 "mouth_width",
@@ -275,6 +295,13 @@ impl MouthParams {
             (self.rows_below + self.rows_above + 1) as f64 * f,
         );
         super::budget::check(file, &format!("{prefix}resolution"), nodes, elements)?;
+        Ok(())
+    }
+
+    /// Checks the lips' asymmetry, and that each lip, thinned or thickened by it, is thicker
+    /// than twice the saliva layer and fits in its side of the face.
+    fn check_lips(&self, file: &str, prefix: &str) -> Result<()> {
+        let err = |field: &str, msg: String| field_error(file, prefix, field, msg);
         if !(self.lip_asymmetry.abs() < 0.8) {
             return err(
                 "lip_asymmetry",
@@ -310,6 +337,13 @@ impl MouthParams {
                 );
             }
         }
+        Ok(())
+    }
+
+    /// Checks the mouth's tilt, and that the jaw's level and the skull's lateral hold lie
+    /// between the lips and the face's edges.
+    fn check_levels(&self, file: &str, prefix: &str) -> Result<()> {
+        let err = |field: &str, msg: String| field_error(file, prefix, field, msg);
         // The tilted mouth line must leave the rows in order: w tan|tilt| < 0.8 height_above.
         if !(self.mouth_tilt.abs() < 0.5)
             || self.mouth_width * self.mouth_tilt.abs().tan()

@@ -656,142 +656,221 @@ pub fn rasterize(
     if w == 0 || h == 0 {
         return Image::new(options.width, options.height, options.background);
     }
-    let frame = camera.frame();
     let lights: Vec<([f64; 3], f64)> = options
         .lights
         .iter()
         .map(|l| (normalize(&l.direction), l.intensity))
         .filter(|(d, _)| *d != [0.0; 3])
         .collect();
-    let to_cam = |n: [f64; 3]| {
-        // Camera coordinates with z towards the viewer.
-        [
-            dot(&n, &frame.right),
-            dot(&n, &frame.up),
-            -dot(&n, &frame.forward),
-        ]
-    };
-    let perspective = camera.projection == Projection::Perspective;
-    let near = 1e-4 * norm(&sub(&camera.target, &camera.eye)).max(1e-12);
     let ssf = ss as f64;
 
     // --- Vertex stage: transform, light, clip, project.
+    let stage = VertexStage {
+        camera,
+        frame: camera.frame(),
+        lights: &lights,
+        options,
+        texture,
+        perspective: camera.projection == Projection::Perspective,
+        near: 1e-4 * norm(&sub(&camera.target, &camera.eye)).max(1e-12),
+        w,
+        h,
+    };
     let screen: Vec<ScreenTriangle> = triangles
         .par_iter()
-        .flat_map_iter(|t| {
-            let mut out: Vec<ScreenTriangle> = Vec::new();
-            let p = t.positions;
-            if !p.iter().flatten().all(|c| c.is_finite()) {
-                return out;
-            }
-            let face_n = normalize(&cross(&sub(&p[1], &p[0]), &sub(&p[2], &p[0])));
-            if face_n == [0.0; 3] {
-                return out; // degenerate
-            }
-            let centroid = scale(&add(&add(&p[0], &p[1]), &p[2]), 1.0 / 3.0);
-            let to_viewer = if perspective {
-                sub(&camera.eye, &centroid)
-            } else {
-                scale(&frame.forward, -1.0)
-            };
-            let flip = if dot(&face_n, &to_viewer) < 0.0 {
-                -1.0
-            } else {
-                1.0
-            };
-            let face_cam = to_cam(scale(&face_n, flip));
-            let flat_light = lambert(face_cam, &lights, options.ambient);
-            let verts: [ClipVertex; 3] = std::array::from_fn(|i| {
-                let vn = normalize(&t.normals[i]);
-                let n = if vn == [0.0; 3] {
-                    face_cam
-                } else {
-                    to_cam(scale(&vn, flip))
-                };
-                let light = match options.shading {
-                    Shading::Flat => flat_light,
-                    _ => lambert(n, &lights, options.ambient),
-                };
-                ClipVertex {
-                    view: camera.to_view(p[i]),
-                    normal: n,
-                    uv: t.uv.map(|uv| uv[i]).unwrap_or([0.0; 2]),
-                    colour: t
-                        .colours
-                        .map(|c| c[i])
-                        .unwrap_or(t.colour)
-                        .map(|c| c as f64),
-                    light,
-                }
-            });
-            // Near-plane clipping (perspective only).
-            let mut poly: Vec<ClipVertex> = verts.to_vec();
-            let mut clipped = false;
-            if perspective && verts.iter().any(|v| v.view[2] < near) {
-                clipped = true;
-                let mut res = Vec::with_capacity(4);
-                for i in 0..poly.len() {
-                    let a = poly[i];
-                    let b = poly[(i + 1) % poly.len()];
-                    let (ina, inb) = (a.view[2] >= near, b.view[2] >= near);
-                    if ina {
-                        res.push(a);
-                    }
-                    if ina != inb {
-                        let s = (near - a.view[2]) / (b.view[2] - a.view[2]);
-                        res.push(a.lerp(&b, s));
-                    }
-                }
-                poly = res;
-            }
-            if poly.len() < 3 {
-                return out;
-            }
-            let colour = t.colour.map(|c| c as f64);
-            let textured = t.uv.is_some() && texture.is_some();
-            let vertex_coloured = !textured && t.colours.is_some();
-            let project = |v: &ClipVertex| -> Option<ScreenVertex> {
-                let (x, y) = camera.view_to_pixel(v.view, w as f64, h as f64)?;
-                let (key, pw) = if perspective {
-                    (1.0 / v.view[2], 1.0 / v.view[2])
-                } else {
-                    (-v.view[2], 1.0)
-                };
-                Some(ScreenVertex {
-                    x,
-                    y,
-                    key,
-                    w: if options.perspective_correct { pw } else { 1.0 },
-                    attr: *v,
-                })
-            };
-            let sv: Option<Vec<ScreenVertex>> = poly.iter().map(project).collect();
-            let Some(sv) = sv else { return out };
-            for i in 1..sv.len() - 1 {
-                let v = [sv[0], sv[i], sv[i + 1]];
-                let ymin = v.iter().map(|q| q.y).fold(f64::INFINITY, f64::min);
-                let ymax = v.iter().map(|q| q.y).fold(f64::NEG_INFINITY, f64::max);
-                if !(ymin.is_finite() && ymax.is_finite()) {
-                    continue;
-                }
-                out.push(ScreenTriangle {
-                    v,
-                    colour,
-                    textured,
-                    vertex_coloured,
-                    flat_light,
-                    edges: if clipped { 0 } else { t.edges },
-                    ymin: (ymin - 0.5).floor().max(0.0) as i64,
-                    ymax: ((ymax - 0.5).ceil() as i64).min(h as i64 - 1),
-                });
-            }
-            out
-        })
+        .flat_map_iter(|t| stage.screen(t))
         .collect();
 
     // --- Bin triangles into horizontal bands (keeping the input order within a band).
     let band_rows = (16 * ss) as usize;
-    let n_bands = (h as usize).div_ceil(band_rows);
+    let bins = bin_bands(&screen, band_rows, (h as usize).div_ceil(band_rows));
+
+    // --- Pixel stage, one band per task.
+    let mut colour_buf = vec![0u8; 3 * w as usize * h as usize];
+    let pixels = PixelStage {
+        screen: &screen,
+        bins: &bins,
+        texture,
+        lights: &lights,
+        options,
+        wire: options
+            .wireframe
+            .map(|wf| (wf.colour.map(|c| c as f64), 0.5 * wf.width_px * ssf)),
+        w: w as usize,
+        band_rows,
+    };
+    colour_buf
+        .par_chunks_mut(3 * w as usize * band_rows)
+        .enumerate()
+        .for_each(|(band, cbuf)| pixels.draw_band(band, cbuf));
+    let img = Image {
+        width: w,
+        height: h,
+        rgb: colour_buf,
+    };
+    img.downsample(ss)
+}
+
+/// What the vertex stage of [`rasterize`] works with ([`VertexStage::screen`]).
+struct VertexStage<'a> {
+    camera: &'a Camera,
+    frame: CameraFrame,
+    /// The lights: unit directions and intensities.
+    lights: &'a [([f64; 3], f64)],
+    options: &'a RenderOptions,
+    texture: Option<&'a Image>,
+    perspective: bool,
+    /// The near plane's distance from the eye (perspective).
+    near: f64,
+    /// The supersampled image's size.
+    w: u32,
+    h: u32,
+}
+
+impl VertexStage<'_> {
+    /// Camera coordinates with z towards the viewer.
+    fn to_cam(&self, n: [f64; 3]) -> [f64; 3] {
+        [
+            dot(&n, &self.frame.right),
+            dot(&n, &self.frame.up),
+            -dot(&n, &self.frame.forward),
+        ]
+    }
+
+    /// Triangle `t` transformed, lit (its normals flipped towards the viewer), clipped
+    /// against the near plane and projected: the screen triangles it becomes, none where it
+    /// is not finite, degenerate or off the image's projection; a clipped one is a fan with no
+    /// wireframe edges.
+    fn screen(&self, t: &Triangle) -> Vec<ScreenTriangle> {
+        let (camera, options) = (self.camera, self.options);
+        let mut out: Vec<ScreenTriangle> = Vec::new();
+        let p = t.positions;
+        if !p.iter().flatten().all(|c| c.is_finite()) {
+            return out;
+        }
+        let face_n = normalize(&cross(&sub(&p[1], &p[0]), &sub(&p[2], &p[0])));
+        if face_n == [0.0; 3] {
+            return out; // degenerate
+        }
+        let centroid = scale(&add(&add(&p[0], &p[1]), &p[2]), 1.0 / 3.0);
+        let to_viewer = if self.perspective {
+            sub(&camera.eye, &centroid)
+        } else {
+            scale(&self.frame.forward, -1.0)
+        };
+        let flip = if dot(&face_n, &to_viewer) < 0.0 {
+            -1.0
+        } else {
+            1.0
+        };
+        let face_cam = self.to_cam(scale(&face_n, flip));
+        let flat_light = lambert(face_cam, self.lights, options.ambient);
+        let verts: [ClipVertex; 3] = std::array::from_fn(|i| {
+            let vn = normalize(&t.normals[i]);
+            let n = if vn == [0.0; 3] {
+                face_cam
+            } else {
+                self.to_cam(scale(&vn, flip))
+            };
+            let light = match options.shading {
+                Shading::Flat => flat_light,
+                _ => lambert(n, self.lights, options.ambient),
+            };
+            ClipVertex {
+                view: camera.to_view(p[i]),
+                normal: n,
+                uv: t.uv.map(|uv| uv[i]).unwrap_or([0.0; 2]),
+                colour: t
+                    .colours
+                    .map(|c| c[i])
+                    .unwrap_or(t.colour)
+                    .map(|c| c as f64),
+                light,
+            }
+        });
+        // Near-plane clipping (perspective only).
+        let mut poly: Vec<ClipVertex> = verts.to_vec();
+        let mut clipped = false;
+        if self.perspective && verts.iter().any(|v| v.view[2] < self.near) {
+            clipped = true;
+            poly = clip_near(&poly, self.near);
+        }
+        if poly.len() < 3 {
+            return out;
+        }
+        let colour = t.colour.map(|c| c as f64);
+        let textured = t.uv.is_some() && self.texture.is_some();
+        let vertex_coloured = !textured && t.colours.is_some();
+        let sv: Option<Vec<ScreenVertex>> = poly.iter().map(|v| self.project(v)).collect();
+        let Some(sv) = sv else { return out };
+        for i in 1..sv.len() - 1 {
+            let v = [sv[0], sv[i], sv[i + 1]];
+            let ymin = v.iter().map(|q| q.y).fold(f64::INFINITY, f64::min);
+            let ymax = v.iter().map(|q| q.y).fold(f64::NEG_INFINITY, f64::max);
+            if !(ymin.is_finite() && ymax.is_finite()) {
+                continue;
+            }
+            out.push(ScreenTriangle {
+                v,
+                colour,
+                textured,
+                vertex_coloured,
+                flat_light,
+                edges: if clipped { 0 } else { t.edges },
+                ymin: (ymin - 0.5).floor().max(0.0) as i64,
+                ymax: ((ymax - 0.5).ceil() as i64).min(self.h as i64 - 1),
+            });
+        }
+        out
+    }
+
+    /// Vertex `v` on the supersampled image, with its depth key and perspective weight;
+    /// `None` where the camera cannot project it.
+    fn project(&self, v: &ClipVertex) -> Option<ScreenVertex> {
+        let (x, y) = self
+            .camera
+            .view_to_pixel(v.view, self.w as f64, self.h as f64)?;
+        let (key, pw) = if self.perspective {
+            (1.0 / v.view[2], 1.0 / v.view[2])
+        } else {
+            (-v.view[2], 1.0)
+        };
+        Some(ScreenVertex {
+            x,
+            y,
+            key,
+            w: if self.options.perspective_correct {
+                pw
+            } else {
+                1.0
+            },
+            attr: *v,
+        })
+    }
+}
+
+/// Polygon `poly` clipped against the plane `view z = near`: the part in front of it (fewer
+/// than three vertices where none is).
+fn clip_near(poly: &[ClipVertex], near: f64) -> Vec<ClipVertex> {
+    let mut res = Vec::with_capacity(4);
+    for i in 0..poly.len() {
+        let a = poly[i];
+        let b = poly[(i + 1) % poly.len()];
+        let (ina, inb) = (a.view[2] >= near, b.view[2] >= near);
+        if ina {
+            res.push(a);
+        }
+        if ina != inb {
+            let s = (near - a.view[2]) / (b.view[2] - a.view[2]);
+            res.push(a.lerp(&b, s));
+        }
+    }
+    res
+}
+
+/// The indices of the triangles of `screen` in each of `n_bands` horizontal bands of
+/// `band_rows` rows that they reach, in the input order within a band.
+fn bin_bands(screen: &[ScreenTriangle], band_rows: usize, n_bands: usize) -> Vec<Vec<u32>> {
     let mut bins: Vec<Vec<u32>> = vec![Vec::new(); n_bands];
     for (i, t) in screen.iter().enumerate() {
         if t.ymax < t.ymin || t.ymax < 0 {
@@ -803,54 +882,67 @@ pub fn rasterize(
             bin.push(i as u32);
         }
     }
+    bins
+}
 
-    // --- Pixel stage, one band per task.
-    let mut colour_buf = vec![0u8; 3 * w as usize * h as usize];
-    let bg = options.background;
-    let wire = options
-        .wireframe
-        .map(|wf| (wf.colour.map(|c| c as f64), 0.5 * wf.width_px * ssf));
-    colour_buf
-        .par_chunks_mut(3 * w as usize * band_rows)
-        .enumerate()
-        .for_each(|(band, cbuf)| {
-            let rows = cbuf.len() / (3 * w as usize);
-            let y0 = band * band_rows;
-            // the depth pass: the triangle seen at each sample (the first in order of those
-            // nearest), then each sample shaded once, by that triangle (the same colour as
-            // drawing the triangles in order over each other, without shading the hidden ones)
-            let mut depth = vec![f64::NEG_INFINITY; rows * w as usize];
-            let mut seen = vec![u32::MAX; rows * w as usize];
-            for &ti in &bins[band] {
-                cover_triangle(
-                    &screen[ti as usize],
-                    ti,
-                    w as usize,
-                    y0,
-                    rows,
-                    &mut depth,
-                    &mut seen,
-                );
+/// What the pixel stage of [`rasterize`] works with ([`PixelStage::draw_band`]).
+struct PixelStage<'a> {
+    screen: &'a [ScreenTriangle],
+    /// The triangles of each band ([`bin_bands`]).
+    bins: &'a [Vec<u32>],
+    texture: Option<&'a Image>,
+    lights: &'a [([f64; 3], f64)],
+    options: &'a RenderOptions,
+    /// The wireframe's colour and half width (samples).
+    wire: Option<([f64; 3], f64)>,
+    /// The supersampled image's width and a band's rows.
+    w: usize,
+    band_rows: usize,
+}
+
+impl PixelStage<'_> {
+    /// Draws band `band` into `cbuf`, its rows of RGB samples.
+    fn draw_band(&self, band: usize, cbuf: &mut [u8]) {
+        let w = self.w;
+        let rows = cbuf.len() / (3 * w);
+        let y0 = band * self.band_rows;
+        // the depth pass: the triangle seen at each sample (the first in order of those
+        // nearest), then each sample shaded once, by that triangle (the same colour as
+        // drawing the triangles in order over each other, without shading the hidden ones)
+        let mut depth = vec![f64::NEG_INFINITY; rows * w];
+        let mut seen = vec![u32::MAX; rows * w];
+        for &ti in &self.bins[band] {
+            cover_triangle(
+                &self.screen[ti as usize],
+                ti,
+                w,
+                y0,
+                rows,
+                &mut depth,
+                &mut seen,
+            );
+        }
+        for (r, (row, seen)) in cbuf
+            .chunks_exact_mut(3 * w)
+            .zip(seen.chunks_exact(w))
+            .enumerate()
+        {
+            for (x, (px, &ti)) in row.chunks_exact_mut(3).zip(seen).enumerate() {
+                px.copy_from_slice(&match self.screen.get(ti as usize) {
+                    Some(t) => shade_sample(
+                        t,
+                        self.texture,
+                        self.lights,
+                        self.options,
+                        self.wire,
+                        x,
+                        y0 + r,
+                    ),
+                    None => self.options.background,
+                });
             }
-            for (r, (row, seen)) in cbuf
-                .chunks_exact_mut(3 * w as usize)
-                .zip(seen.chunks_exact(w as usize))
-                .enumerate()
-            {
-                for (x, (px, &ti)) in row.chunks_exact_mut(3).zip(seen).enumerate() {
-                    px.copy_from_slice(&match screen.get(ti as usize) {
-                        Some(t) => shade_sample(t, texture, &lights, options, wire, x, y0 + r),
-                        None => bg,
-                    });
-                }
-            }
-        });
-    let img = Image {
-        width: w,
-        height: h,
-        rgb: colour_buf,
-    };
-    img.downsample(ss)
+        }
+    }
 }
 
 /// The triangle's signed double area in pixels and its barycentric weights at the centre of

@@ -78,8 +78,48 @@ pub(crate) fn pack<T: GpuReal>(
     let pres_base = 1 + n_loads;
     let rot_base = pres_base + c.prescribed.len();
     let row_stride = rot_base + 9 * c.rotations.len();
-    // loads: per node, in the CPU's accumulation order (group, then entry); a key is
-    // component | (row index of the group's curve value) << 2
+    let (load_key, load_val) = load_lists(disc);
+    let (dof_slot, imposed) = imposed_dofs(problem, disc, pres_base, rot_base);
+    let (imp_key, imp_coef) = imposed_csr(&imposed);
+    let ns = disc.saliva.elements.len();
+    let (sal_meta, sal_const, sal_real0) = saliva_arrays::<T>(disc)?;
+
+    let stride = ns.max(1);
+    let params = Params {
+        num_elements: ne as u32,
+        num_nodes: nn as u32,
+        num_saliva: ns as u32,
+        num_imposed: imposed.len() as u32,
+        row_stride: row_stride as u32,
+        table_stride: stride as u32,
+        _pad0: 0,
+        _pad1: 0,
+    };
+    Ok(Packed {
+        conn,
+        dhdx,
+        gamma,
+        escal,
+        gather,
+        node_a,
+        load_key,
+        load_val,
+        dof_slot,
+        imp_key,
+        imp_coef,
+        sal_meta,
+        sal_const,
+        sal_state0: [0u32, NEVER].repeat(ns),
+        sal_real0,
+        params,
+    })
+}
+
+/// The per-node load lists ([`Packed::load_key`], [`Packed::load_val`]): per node, in the
+/// CPU's accumulation order (group, then entry); a key is component | (row index of the
+/// group's curve value) << 2.
+fn load_lists(disc: &Discretisation) -> (Vec<u32>, Vec<f64>) {
+    let nn = disc.num_nodes;
     let mut per_node: Vec<Vec<(u32, f64)>> = vec![Vec::new(); nn];
     for (g, grp) in disc.loads.iter().enumerate() {
         for &(dof, v) in &grp.entries {
@@ -98,10 +138,23 @@ pub(crate) fn pack<T: GpuReal>(
         load_key.push(keys.len() as u32);
     }
     load_key.extend(keys);
-    // constraints: what each DOF becomes after the update (rotation > prescribed > fixed,
-    // the order in which the CPU's apply_constraints overwrites); an imposed DOF is a
-    // list of terms (coefficient, row index), see the module documentation
-    let mut dof_slot = vec![DOF_FREE; 3 * nn];
+    (load_key, load_val)
+}
+
+/// The constraints ([`Packed::dof_slot`]) and the imposed values' terms `(coefficient, row
+/// index)`, the prescribed curves' rows from `pres_base`, the rotations' from `rot_base`.
+///
+/// What each DOF becomes after the update (rotation > prescribed > fixed, the order in which
+/// the CPU's apply_constraints overwrites); an imposed DOF is a list of terms (coefficient,
+/// row index), see the module documentation.
+fn imposed_dofs(
+    problem: &Problem,
+    disc: &Discretisation,
+    pres_base: usize,
+    rot_base: usize,
+) -> (Vec<u32>, Vec<Vec<(f64, u32)>>) {
+    let c = &disc.constraints;
+    let mut dof_slot = vec![DOF_FREE; 3 * disc.num_nodes];
     for &k in &c.fixed {
         dof_slot[k as usize] = DOF_FIXED;
     }
@@ -142,10 +195,15 @@ pub(crate) fn pack<T: GpuReal>(
             }
         }
     }
-    // CSR: offsets (num_imposed + 1), then the row index of every term; coefficients apart
+    (dof_slot, imposed)
+}
+
+/// The imposed values' terms as CSR ([`Packed::imp_key`]: offsets (num_imposed + 1), then
+/// the row index of every term) and their coefficients apart ([`Packed::imp_coef`]).
+fn imposed_csr(imposed: &[Vec<(f64, u32)>]) -> (Vec<u32>, Vec<f64>) {
     let mut imp_key: Vec<u32> = Vec::with_capacity(imposed.len() + 1);
     imp_key.push(0);
-    for terms in &imposed {
+    for terms in imposed {
         imp_key.push(imp_key.last().unwrap() + terms.len() as u32);
     }
     imp_key.extend(imposed.iter().flatten().map(|&(_, i)| i));
@@ -153,10 +211,16 @@ pub(crate) fn pack<T: GpuReal>(
     if imp_coef.is_empty() {
         imp_coef.push(0.0); // never read; a binding holds at least one element
     }
+    (imp_key, imp_coef)
+}
+
+/// The saliva's arrays: [`Packed::sal_meta`], [`Packed::sal_const`] and
+/// [`Packed::sal_real0`]. Fails if an element is listed twice among the saliva elements.
+fn saliva_arrays<T: GpuReal>(disc: &Discretisation) -> Result<(Vec<u32>, Vec<T>, Vec<T>)> {
     let sp = &disc.saliva;
     let ns = sp.elements.len();
     // [saliva index per element (NO_SALIVA if none) | group, rule per saliva element]
-    let mut sal_meta = vec![NO_SALIVA; ne];
+    let mut sal_meta = vec![NO_SALIVA; disc.num_elements()];
     for (k, &e) in sp.elements.iter().enumerate() {
         if sal_meta[e as usize] != NO_SALIVA {
             return Err(Error::Gpu(format!(
@@ -189,36 +253,7 @@ pub(crate) fn pack<T: GpuReal>(
             v
         })
         .collect();
-
-    let stride = ns.max(1);
-    let params = Params {
-        num_elements: ne as u32,
-        num_nodes: nn as u32,
-        num_saliva: ns as u32,
-        num_imposed: imposed.len() as u32,
-        row_stride: row_stride as u32,
-        table_stride: stride as u32,
-        _pad0: 0,
-        _pad1: 0,
-    };
-    Ok(Packed {
-        conn,
-        dhdx,
-        gamma,
-        escal,
-        gather,
-        node_a,
-        load_key,
-        load_val,
-        dof_slot,
-        imp_key,
-        imp_coef,
-        sal_meta,
-        sal_const,
-        sal_state0: [0u32, NEVER].repeat(ns),
-        sal_real0,
-        params,
-    })
+    Ok((sal_meta, sal_const, sal_real0))
 }
 
 /// The step row of iteration `s` (see the module documentation of `gpu::sim`): the constant

@@ -578,21 +578,49 @@ fn saliva_layer(xs: &[f64], contour_y: &[(f64, f64)], p: &FaceParams) -> SalivaL
     }
 }
 
-/// Builds the model (module docs). `file` names the source in errors.
-pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> {
-    p.validate(file, "")?;
+/// The grid's columns in the front view ([`layout`]).
+struct Layout {
+    grid: FaceGrid,
+    /// The columns' `x` (m), `columns + 1` of them from `-x`: the right side columns, the
+    /// mouth columns from corner to corner, the left side columns.
+    xs: Vec<f64>,
+    /// The mouth corners: the upper contour's first point (at smaller `x`) and its last.
+    corner_r: [f64; 3],
+    corner_l: [f64; 3],
+    /// The mouth centre's `x` and `y` (m).
+    xc: f64,
+    yc: f64,
+    /// The narrower side column's width (m): the joined row beyond a corner grows to it.
+    side_dx: f64,
+}
+
+impl Layout {
+    /// The mouth's width from corner to corner (m).
+    fn mouth_width(&self) -> f64 {
+        self.corner_l[0] - self.corner_r[0]
+    }
+
+    /// Vertex `(i, r)`: column `i` from `-x`, row `r` from the bottom.
+    fn id(&self, i: usize, r: usize) -> u32 {
+        (r * (self.grid.columns() + 1) + i) as u32
+    }
+
+    /// Whether the quad of column `i` in the saliva row is saliva: a mouth column, farther
+    /// than `commissure` from each corner.
+    fn is_saliva(&self, i: usize, commissure: f64) -> bool {
+        let (ns, nm) = (self.grid.side_columns, self.grid.mouth_columns);
+        let (xr, xl) = (self.corner_r[0], self.corner_l[0]);
+        let xq = 0.5 * (self.xs[i] + self.xs[i + 1]);
+        i >= ns && i < ns + nm && xq - xr >= commissure && xl - xq >= commissure
+    }
+}
+
+/// The columns for source `src`: the mouth corners from the lip contours, the grid sizes
+/// after the resolution multiplier, the columns' `x`. Fails if `half_width` leaves no face
+/// beside the corners.
+fn layout(src: &FaceSource, p: &FaceParams, file: &str) -> Result<Layout> {
     let d = &src.data;
-    let skin_s = &src.surface;
-    let skin = Skin::new(skin_s);
-    let upper = Contour {
-        s: skin_s,
-        line: &d.upper_contour,
-    };
-    let lower = Contour {
-        s: skin_s,
-        line: &d.lower_contour,
-    };
-    let pv = |v: u32| skin_s.vertices[v as usize];
+    let pv = |v: u32| src.surface.vertices[v as usize];
     let corner_r = pv(d.upper_contour[0]);
     let corner_l = pv(*d.upper_contour.last().expect("contour"));
     let xc = d.mouth_center[0];
@@ -624,8 +652,6 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
         rows_above: ((p.rows_above as f64 * f).round() as usize).max(2),
     };
     let nc = grid.columns();
-    let (rb, ra) = (grid.rows_below, grid.rows_above);
-    let nr = grid.rows();
     let xs: Vec<f64> = (0..=nc)
         .map(|i| {
             if i <= ns {
@@ -638,8 +664,39 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
         })
         .collect();
     let side_dx = ((xr - right_edge) / ns as f64).min((left_edge - xl) / ns as f64);
-    // the saliva row: contour points in the mouth, a joined row beyond the corners
-    let gap = p.min_saliva_gap;
+    Ok(Layout {
+        grid,
+        xs,
+        corner_r,
+        corner_l,
+        xc,
+        yc,
+        side_dx,
+    })
+}
+
+/// The saliva row's two vertices in every column ([`saliva_row`]).
+struct SalivaRow {
+    /// The lower and the upper vertex in the mouth columns (the contours' points, moved up or
+    /// down to the layer's height), `None` beyond the corners.
+    lo: Vec<Option<Sample>>,
+    hi: Vec<Option<Sample>>,
+    /// The lower and the upper vertex's `y` in every column (m).
+    y_lo: Vec<f64>,
+    y_hi: Vec<f64>,
+}
+
+/// The saliva row: contour points in the mouth ([`saliva_layer`] sets their heights), a
+/// joined row beyond the corners. Gives the row and the layer.
+fn saliva_row(
+    l: &Layout,
+    lower: &Contour,
+    upper: &Contour,
+    p: &FaceParams,
+) -> (SalivaRow, SalivaLayer) {
+    let (ns, nm) = (l.grid.side_columns, l.grid.mouth_columns);
+    let nc = l.grid.columns();
+    let xs = &l.xs;
     let mouth = ns..=ns + nm;
     let mut row_lo: Vec<Option<Sample>> = Vec::with_capacity(nc + 1);
     let mut row_hi: Vec<Option<Sample>> = Vec::with_capacity(nc + 1);
@@ -673,7 +730,7 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
             } else {
                 (i - ns - nm, h_l, m_l)
             };
-            let joined = h0.max(side_dx);
+            let joined = h0.max(l.side_dx);
             let t = (k as f64 / 3.0).min(1.0);
             let h = 0.5 * (h0 + (joined - h0) * t * t * (3.0 - 2.0 * t));
             y_lo.push(m0 - h);
@@ -682,49 +739,30 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
             row_hi.push(None);
         }
     }
-    // the chin's outline: scanning down each column from below the lower lip while the skin
-    // faces forward and the front-most surface does not jump back (to the neck)
-    let step = 2.5e-4;
+    let row = SalivaRow {
+        lo: row_lo,
+        hi: row_hi,
+        y_lo,
+        y_hi,
+    };
+    (row, layer)
+}
+
+/// The chin's outline in every column (`y`, m, not smoothed): scanning down each column from
+/// below the lower lip (`y_lo`) while the skin faces forward and the front-most surface does
+/// not jump back (to the neck). Fails where a column faces forward for less than 4 mm.
+fn chin_outline(
+    skin: &Skin,
+    l: &Layout,
+    y_lo: &[f64],
+    p: &FaceParams,
+    file: &str,
+) -> Result<Vec<f64>> {
+    let (xs, xc, yc) = (&l.xs, l.xc, l.yc);
     let y_floor = yc - p.below;
-    let mut raw_bot: Vec<f64> = Vec::with_capacity(nc + 1);
+    let mut raw_bot: Vec<f64> = Vec::with_capacity(xs.len());
     for (i, &x) in xs.iter().enumerate() {
-        // samples down the column: (y, z) where the skin faces forward, None where it does not
-        let mut col: Vec<(f64, Option<f64>)> = Vec::new();
-        let mut y = y_lo[i] - OUTLINE_START;
-        while y >= y_floor {
-            col.push((
-                y,
-                skin.hit(x, y)
-                    .filter(|h| h.1 >= p.min_facing)
-                    .map(|h| h.0.x[2]),
-            ));
-            y -= step;
-        }
-        // the outline: the last good sample before the neck (a jump back) or before a run of
-        // samples that do not face forward longer than OUTLINE_GAP (a short run is an
-        // overhang, e.g. the lower lip's underside)
-        let mut bottom: Option<f64> = None;
-        let mut last_z: Option<f64> = None;
-        let mut bad_from: Option<f64> = None;
-        for &(y, z) in &col {
-            match z {
-                Some(z) => {
-                    if last_z.is_some_and(|l| l - z > OUTLINE_JUMP) {
-                        break;
-                    }
-                    bad_from = None;
-                    bottom = Some(y);
-                    last_z = Some(z);
-                }
-                None => {
-                    let start = *bad_from.get_or_insert(y);
-                    if start - y > OUTLINE_GAP {
-                        break;
-                    }
-                }
-            }
-        }
-        match bottom {
+        match column_bottom(skin, x, y_lo[i] - OUTLINE_START, y_floor, p.min_facing) {
             Some(yb) if yb < y_lo[i] - 0.004 => raw_bot.push(yb),
             _ => {
                 return Err(Error::input(
@@ -748,6 +786,55 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
             );
         }
     }
+    Ok(raw_bot)
+}
+
+/// The chin's outline in the column at `x`, scanned down from `y_start` to `y_floor` in
+/// steps of 0.25 mm: the `y` of the last sample facing forward (by `min_facing`) before the
+/// neck (a jump back) or before a run of samples that do not face forward longer than
+/// OUTLINE_GAP (a short run is an overhang, e.g. the lower lip's underside). `None` if no
+/// sample faces forward.
+fn column_bottom(skin: &Skin, x: f64, y_start: f64, y_floor: f64, min_facing: f64) -> Option<f64> {
+    let step = 2.5e-4;
+    // samples down the column: (y, z) where the skin faces forward, None where it does not
+    let mut col: Vec<(f64, Option<f64>)> = Vec::new();
+    let mut y = y_start;
+    while y >= y_floor {
+        col.push((
+            y,
+            skin.hit(x, y)
+                .filter(|h| h.1 >= min_facing)
+                .map(|h| h.0.x[2]),
+        ));
+        y -= step;
+    }
+    let mut bottom: Option<f64> = None;
+    let mut last_z: Option<f64> = None;
+    let mut bad_from: Option<f64> = None;
+    for &(y, z) in &col {
+        match z {
+            Some(z) => {
+                if last_z.is_some_and(|l| l - z > OUTLINE_JUMP) {
+                    break;
+                }
+                bad_from = None;
+                bottom = Some(y);
+                last_z = Some(z);
+            }
+            None => {
+                let start = *bad_from.get_or_insert(y);
+                if start - y > OUTLINE_GAP {
+                    break;
+                }
+            }
+        }
+    }
+    bottom
+}
+
+/// The model's bottom edge from the chin's outline `raw_bot`: the highest outline point
+/// within three columns, smoothed three times (1/4, 1/2, 1/4), never below the outline.
+fn smooth_outline(raw_bot: &[f64]) -> Vec<f64> {
     let n = raw_bot.len();
     let mut y_bot: Vec<f64> = (0..n)
         .map(|i| {
@@ -768,15 +855,31 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
     for i in 0..n {
         y_bot[i] = y_bot[i].max(raw_bot[i]);
     }
-    let y_top = yc + p.above;
-    // the vertices
+    y_bot
+}
+
+/// The grid's vertices, row by row from the bottom: the saliva row's two from `row`, the
+/// others the front-most skin at their `x, y` (rows graded from the saliva row to `y_bot`
+/// below and to `y_top` above). Fails where the skin does not cover a vertex.
+fn grid_vertices(
+    skin: &Skin,
+    l: &Layout,
+    row: &SalivaRow,
+    y_bot: &[f64],
+    y_top: f64,
+    file: &str,
+) -> Result<Vec<Sample>> {
+    let nc = l.grid.columns();
+    let (rb, ra) = (l.grid.rows_below, l.grid.rows_above);
+    let nr = l.grid.rows();
+    let (y_lo, y_hi) = (&row.y_lo, &row.y_hi);
     let mut samples: Vec<Sample> = Vec::with_capacity((nc + 1) * (nr + 1));
     for r in 0..=nr {
-        for (i, &x) in xs.iter().enumerate() {
+        for (i, &x) in l.xs.iter().enumerate() {
             let contour_point = if r == rb {
-                row_lo[i].clone()
+                row.lo[i].clone()
             } else if r == rb + 1 {
-                row_hi[i].clone()
+                row.hi[i].clone()
             } else {
                 None
             };
@@ -795,8 +898,8 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
                             format!(
                                 "no skin at x = {:.2} mm, y = {:.2} mm from the mouth centre (grid vertex {i}, row {r}): \
                                  the kept face does not cover the model's area",
-                                1e3 * (x - xc),
-                                1e3 * (y - yc)
+                                1e3 * (x - l.xc),
+                                1e3 * (y - l.yc)
                             ),
                         )
                     })?
@@ -805,12 +908,17 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
             samples.push(smp);
         }
     }
-    let id = |i: usize, r: usize| (r * (nc + 1) + i) as u32;
-    // the saliva quads: the mouth columns' row, less the commissure at each corner
-    let is_saliva = |i: usize| {
-        let xq = 0.5 * (xs[i] + xs[i + 1]);
-        i >= ns && i < ns + nm && xq - xr >= p.commissure && xl - xq >= p.commissure
-    };
+    Ok(samples)
+}
+
+/// The grid's quads and their groups (0 `upper_face`, 1 `lower_face`, 2 `saliva`): the
+/// saliva row's mouth columns are saliva, less the commissure at each corner. Fails if the
+/// commissure leaves no saliva.
+fn grid_quads(l: &Layout, p: &FaceParams, file: &str) -> Result<(Vec<[u32; 4]>, Vec<u32>)> {
+    let (ns, nm) = (l.grid.side_columns, l.grid.mouth_columns);
+    let (nc, nr, rb) = (l.grid.columns(), l.grid.rows(), l.grid.rows_below);
+    let id = |i: usize, r: usize| l.id(i, r);
+    let is_saliva = |i: usize| l.is_saliva(i, p.commissure);
     if !(ns..ns + nm).any(is_saliva) {
         return Err(Error::field(
             file,
@@ -818,7 +926,7 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
             format!(
                 "{} mm at each corner leaves no saliva in a mouth {:.1} mm wide",
                 1e3 * p.commissure,
-                1e3 * mouth_w
+                1e3 * l.mouth_width()
             ),
         ));
     }
@@ -837,20 +945,309 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
             group_of_quad.push(g);
         }
     }
-    let interp = |vals: &dyn Fn(u32) -> Vec<f64>, dim: usize| -> Vec<Vec<f64>> {
-        samples
-            .iter()
-            .map(|s| {
-                let mut out = vec![0.0; dim];
-                for &(v, w) in &s.from {
-                    for (o, x) in out.iter_mut().zip(vals(v)) {
-                        *o += w * x;
-                    }
+    Ok((quads, group_of_quad))
+}
+
+/// Data `vals` (`dim` values at each source vertex) at every sample: the sum over the
+/// source vertices it is made of, each value times its weight.
+fn interpolate(samples: &[Sample], vals: &dyn Fn(u32) -> Vec<f64>, dim: usize) -> Vec<Vec<f64>> {
+    samples
+        .iter()
+        .map(|s| {
+            let mut out = vec![0.0; dim];
+            for &(v, w) in &s.from {
+                for (o, x) in out.iter_mut().zip(vals(v)) {
+                    *o += w * x;
                 }
-                out
-            })
-            .collect()
+            }
+            out
+        })
+        .collect()
+}
+
+/// The model's node sets ([`node_sets`]).
+struct NodeSets {
+    skull: Vec<u32>,
+    jaw: Vec<u32>,
+    upper_lip: Vec<u32>,
+    lower_lip: Vec<u32>,
+}
+
+/// The node sets `skull`, `jaw` and the lips' (both layers) of the grid `l` whose surface has
+/// `nv` vertices at `vertices`: the skull holds the top row, the lateral edges at and above
+/// the mouth line and the modiolus, the jaw moves the vertices of jaw weight at least
+/// `p.jaw_weight`; the vestibule adds inner nodes to each. Fails if the jaw takes no vertex,
+/// the modiolus none, or a node is in both.
+fn node_sets(
+    l: &Layout,
+    vertices: &[[f64; 3]],
+    row: &SalivaRow,
+    jaw_weight: &[f64],
+    cols: &LipColumns,
+    p: &FaceParams,
+    file: &str,
+) -> Result<NodeSets> {
+    let (nc, nr, rb) = (l.grid.columns(), l.grid.rows(), l.grid.rows_below);
+    let nv = vertices.len() as u32;
+    let mut skull: Vec<u32> = (0..=nc).map(|i| l.id(i, nr)).collect();
+    for r in rb + 1..=nr {
+        skull.push(l.id(0, r));
+        skull.push(l.id(nc, r));
+    }
+    skull.sort_unstable();
+    skull.dedup();
+    let mut jaw: Vec<u32> = (0..nv)
+        .filter(|&v| jaw_weight[v as usize] >= p.jaw_weight)
+        .collect();
+    if jaw.is_empty() {
+        return Err(Error::input(
+            file,
+            Location::None,
+            format!(
+                "no vertex of the model has a jaw weight of at least {}: nothing would move the jaw",
+                p.jaw_weight
+            ),
+        ));
+    }
+    let mut upper_lip = cols.upper.clone();
+    let mut lower_lip = cols.lower.clone();
+    for set in [&mut skull, &mut jaw, &mut upper_lip, &mut lower_lip] {
+        both_layers(set, nv);
+    }
+    if p.modiolus_radius > 0.0 {
+        hold_modioli(l, vertices, &jaw, &mut skull, p, file)?;
+    }
+    // the vestibule: the inner layer held by the maxilla above the lips, moved by the
+    // mandible below them
+    if p.vestibule > 0.0 {
+        for r in 0..=nr {
+            for i in 0..=nc {
+                let v = l.id(i, r);
+                let y = vertices[v as usize][1];
+                if r > rb + 1 && y > row.y_hi[i] + p.vestibule {
+                    skull.push(v + nv);
+                } else if r < rb && y < row.y_lo[i] - p.vestibule {
+                    jaw.push(v + nv);
+                }
+            }
+        }
+    }
+    for set in [&mut skull, &mut jaw] {
+        set.sort_unstable();
+        set.dedup();
+    }
+    check_disjoint(&skull, &jaw, nc, nv, p, file)?;
+    Ok(NodeSets {
+        skull,
+        jaw,
+        upper_lip,
+        lower_lip,
+    })
+}
+
+/// Adds to the surface vertices in `set` their copies on the inner side (`+ nv`), sorted.
+fn both_layers(set: &mut Vec<u32>, nv: u32) {
+    let n = set.len();
+    for k in 0..n {
+        set.push(set[k] + nv);
+    }
+    set.sort_unstable();
+    set.dedup();
+}
+
+/// The modiolus beyond each corner, held with the skull (both layers): adds to `skull` the
+/// vertices not in `jaw` within `modiolus_radius` of either point. Fails if it takes none.
+fn hold_modioli(
+    l: &Layout,
+    vertices: &[[f64; 3]],
+    jaw: &[u32],
+    skull: &mut Vec<u32>,
+    p: &FaceParams,
+    file: &str,
+) -> Result<()> {
+    let nv = vertices.len() as u32;
+    let (xr, xl) = (l.corner_r[0], l.corner_l[0]);
+    let centres = [
+        [xr - p.modiolus_lateral, l.corner_r[1]],
+        [xl + p.modiolus_lateral, l.corner_l[1]],
+    ];
+    let mut held = 0;
+    for v in 0..nv {
+        let x = vertices[v as usize];
+        if jaw.binary_search(&v).is_err()
+            && centres
+                .iter()
+                .any(|c| (x[0] - c[0]).hypot(x[1] - c[1]) <= p.modiolus_radius)
+        {
+            skull.extend([v, v + nv]);
+            held += 1;
+        }
+    }
+    if held == 0 {
+        return Err(Error::field(
+            file,
+            "modiolus_radius",
+            format!(
+                "{} mm around the points {} mm beyond the corners takes no vertex of the model",
+                1e3 * p.modiolus_radius,
+                1e3 * p.modiolus_lateral
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Fails, naming the first such node by its column and row, if a node is in both `skull`
+/// and `jaw` (both sorted).
+fn check_disjoint(
+    skull: &[u32],
+    jaw: &[u32],
+    nc: usize,
+    nv: u32,
+    p: &FaceParams,
+    file: &str,
+) -> Result<()> {
+    if let Some(v) = jaw.iter().find(|v| skull.binary_search(v).is_ok()) {
+        let s = *v % nv;
+        return Err(Error::input(
+            file,
+            Location::None,
+            format!(
+                "node {v} (column {}, row {}{}) is both held by the skull{} and moved by the jaw",
+                s as usize % (nc + 1),
+                s as usize / (nc + 1),
+                if *v >= nv { ", inner layer" } else { "" },
+                if p.modiolus_radius > 0.0 {
+                    " (or the modiolus: make modiolus_radius smaller)"
+                } else {
+                    ""
+                }
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The unit axis across the layer of each saliva element (by element, module docs): the
+/// normal of the plane of the mouth's direction along the row and the extrusion direction,
+/// pointing from the lower lip to the upper.
+fn saliva_axes(l: &Layout, vertices: &[[f64; 3]], commissure: f64) -> BTreeMap<u32, [f64; 3]> {
+    let (ns, nm) = (l.grid.side_columns, l.grid.mouth_columns);
+    let (nc, rb) = (l.grid.columns(), l.grid.rows_below);
+    let id = |i: usize, r: usize| l.id(i, r);
+    let back = [0.0, 0.0, -1.0];
+    let mut across = BTreeMap::new();
+    for i in (ns..ns + nm).filter(|&i| l.is_saliva(i, commissure)) {
+        let q = (rb * nc + i) as u32;
+        let x = |v: u32| vertices[v as usize];
+        let along = sub(&x(id(i + 1, rb)), &x(id(i, rb)));
+        let along2 = sub(&x(id(i + 1, rb + 1)), &x(id(i, rb + 1)));
+        let a = unit(&[0, 1, 2].map(|k| along[k] + along2[k]));
+        let mut nrm = unit(&cross(&a, &back));
+        let rung = sub(&x(id(i, rb + 1)), &x(id(i, rb)));
+        if dot(&nrm, &rung) < 0.0 {
+            nrm = nrm.map(|v| -v);
+        }
+        across.insert(q, nrm);
+    }
+    across
+}
+
+/// The element sets `tissue_upper`, `tissue_lower` (the groups' sets) and `tissue` (both).
+fn add_tissue_sets(es: &mut BTreeMap<String, Vec<u32>>) {
+    let up = es.get("upper_face").cloned().unwrap_or_default();
+    let low = es.get("lower_face").cloned().unwrap_or_default();
+    let mut tissue: Vec<u32> = up.iter().chain(low.iter()).copied().collect();
+    tissue.sort_unstable();
+    es.insert("tissue_upper".into(), up);
+    es.insert("tissue_lower".into(), low);
+    es.insert("tissue".into(), tissue);
+}
+
+/// The muscles from their landmarks: each line at mid-depth of the layer, its cylinder
+/// reaching `muscle_reach` around it in the skin (and the half depth across), inactive.
+fn face_muscles(landmarks: &[MuscleLandmarks], p: &FaceParams) -> Vec<Muscle> {
+    let depth = 0.5 * p.thickness;
+    let radius = (p.muscle_reach.powi(2) + depth * depth).sqrt();
+    landmarks
+        .iter()
+        .map(|m: &MuscleLandmarks| Muscle {
+            name: m.name.clone(),
+            origin: [m.origin[0], m.origin[1], m.origin[2] - depth],
+            insertion: [m.insertion[0], m.insertion[1], m.insertion[2] - depth],
+            radius,
+            strength: p.muscle_strength,
+            activation: 0.0,
+            curve: LoadCurve {
+                shape: LoadShape::SmoothStep,
+                start: 0.0,
+                duration: 0.1,
+            },
+        })
+        .collect()
+}
+
+/// The model's notes: its sizes, and the saliva layer's thickness or widening.
+fn model_notes(
+    p: &FaceParams,
+    grid: &FaceGrid,
+    mesh: &Mesh,
+    lip_columns: usize,
+    layer: &SalivaLayer,
+) -> Vec<String> {
+    let mut notes = vec![format!(
+        "resolution {}: {} columns ({} between the corners), {} rows ({} below the saliva row, {} above); \
+         {} hexahedra, {} nodes; {} lip columns",
+        p.resolution,
+        grid.columns(),
+        grid.mouth_columns,
+        grid.rows(),
+        grid.rows_below,
+        grid.rows_above,
+        mesh.elements.len(),
+        mesh.nodes.len(),
+        lip_columns
+    )];
+    match layer.thickness {
+        Some(t) => notes.push(format!(
+            "every saliva element is {:.3} mm thick across the layer; the lip lines moved up or down by at most {:.3} mm from the contours",
+            1e3 * t,
+            1e3 * layer.largest_shift
+        )),
+        None if layer.widened > 0 => notes.push(format!(
+            "the saliva row was widened to {} mm at {} columns where the lip contours are closer (the corners)",
+            1e3 * p.min_saliva_gap,
+            layer.widened
+        )),
+        None => {}
+    }
+    notes
+}
+
+/// Builds the model (module docs). `file` names the source in errors.
+pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> {
+    p.validate(file, "")?;
+    let d = &src.data;
+    let skin_s = &src.surface;
+    let skin = Skin::new(skin_s);
+    let upper = Contour {
+        s: skin_s,
+        line: &d.upper_contour,
     };
+    let lower = Contour {
+        s: skin_s,
+        line: &d.lower_contour,
+    };
+    let l = layout(src, p, file)?;
+    let grid = l.grid;
+    let (ns, nm, rb) = (grid.side_columns, grid.mouth_columns, grid.rows_below);
+    let (row, layer) = saliva_row(&l, &lower, &upper, p);
+    let raw_bot = chin_outline(&skin, &l, &row.y_lo, p, file)?;
+    let y_bot = smooth_outline(&raw_bot);
+    let y_top = l.yc + p.above;
+    let samples = grid_vertices(&skin, &l, &row, &y_bot, y_top, file)?;
+    let (quads, group_of_quad) = grid_quads(&l, p, file)?;
+    let interp = |vals: &dyn Fn(u32) -> Vec<f64>, dim: usize| interpolate(&samples, vals, dim);
     let uv = skin_s.uv.as_ref().map(|uv| {
         interp(&|v| uv[v as usize].to_vec(), 2)
             .into_iter()
@@ -873,165 +1270,25 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
         file,
     )?;
     let nv = surface.vertices.len() as u32;
-    let both = |set: &mut Vec<u32>| {
-        let n = set.len();
-        for k in 0..n {
-            set.push(set[k] + nv);
-        }
-        set.sort_unstable();
-        set.dedup();
-    };
     let jaw_weight: Vec<f64> = interp(&|v| vec![d.jaw_weight[v as usize]], 1)
         .into_iter()
         .map(|w| w[0])
         .collect();
-    let mut skull: Vec<u32> = (0..=nc).map(|i| id(i, nr)).collect();
-    for r in rb + 1..=nr {
-        skull.push(id(0, r));
-        skull.push(id(nc, r));
-    }
-    skull.sort_unstable();
-    skull.dedup();
-    let mut jaw: Vec<u32> = (0..nv)
-        .filter(|&v| jaw_weight[v as usize] >= p.jaw_weight)
-        .collect();
-    if jaw.is_empty() {
-        return Err(Error::input(
-            file,
-            Location::None,
-            format!(
-                "no vertex of the model has a jaw weight of at least {}: nothing would move the jaw",
-                p.jaw_weight
-            ),
-        ));
-    }
     let cols = LipColumns {
-        x: (ns..=ns + nm).map(|i| xs[i]).collect(),
-        upper: (ns..=ns + nm).map(|i| id(i, rb + 1)).collect(),
-        lower: (ns..=ns + nm).map(|i| id(i, rb)).collect(),
-        center: xc,
+        x: (ns..=ns + nm).map(|i| l.xs[i]).collect(),
+        upper: (ns..=ns + nm).map(|i| l.id(i, rb + 1)).collect(),
+        lower: (ns..=ns + nm).map(|i| l.id(i, rb)).collect(),
+        center: l.xc,
     };
-    // across axes of the saliva elements
-    let back = [0.0, 0.0, -1.0];
-    let mut across = BTreeMap::new();
-    for i in (ns..ns + nm).filter(|&i| is_saliva(i)) {
-        let q = (rb * nc + i) as u32;
-        let x = |v: u32| surface.vertices[v as usize];
-        let along = sub(&x(id(i + 1, rb)), &x(id(i, rb)));
-        let along2 = sub(&x(id(i + 1, rb + 1)), &x(id(i, rb + 1)));
-        let a = unit(&[0, 1, 2].map(|k| along[k] + along2[k]));
-        let mut nrm = unit(&cross(&a, &back));
-        let rung = sub(&x(id(i, rb + 1)), &x(id(i, rb)));
-        if dot(&nrm, &rung) < 0.0 {
-            nrm = nrm.map(|v| -v);
-        }
-        across.insert(q, nrm);
-    }
-    let mut upper_lip = cols.upper.clone();
-    let mut lower_lip = cols.lower.clone();
-    for set in [&mut skull, &mut jaw, &mut upper_lip, &mut lower_lip] {
-        both(set);
-    }
-    // the modiolus beyond each corner, held with the skull (both layers)
-    if p.modiolus_radius > 0.0 {
-        let centres = [
-            [xr - p.modiolus_lateral, corner_r[1]],
-            [xl + p.modiolus_lateral, corner_l[1]],
-        ];
-        let mut held = 0;
-        for v in 0..nv {
-            let x = surface.vertices[v as usize];
-            if jaw.binary_search(&v).is_err()
-                && centres
-                    .iter()
-                    .any(|c| (x[0] - c[0]).hypot(x[1] - c[1]) <= p.modiolus_radius)
-            {
-                skull.extend([v, v + nv]);
-                held += 1;
-            }
-        }
-        if held == 0 {
-            return Err(Error::field(
-                file,
-                "modiolus_radius",
-                format!(
-                    "{} mm around the points {} mm beyond the corners takes no vertex of the model",
-                    1e3 * p.modiolus_radius,
-                    1e3 * p.modiolus_lateral
-                ),
-            ));
-        }
-    }
-    // the vestibule: the inner layer held by the maxilla above the lips, moved by the
-    // mandible below them
-    if p.vestibule > 0.0 {
-        for r in 0..=nr {
-            for i in 0..=nc {
-                let v = id(i, r);
-                let y = surface.vertices[v as usize][1];
-                if r > rb + 1 && y > y_hi[i] + p.vestibule {
-                    skull.push(v + nv);
-                } else if r < rb && y < y_lo[i] - p.vestibule {
-                    jaw.push(v + nv);
-                }
-            }
-        }
-    }
-    for set in [&mut skull, &mut jaw] {
-        set.sort_unstable();
-        set.dedup();
-    }
-    if let Some(v) = jaw.iter().find(|v| skull.binary_search(v).is_ok()) {
-        let s = *v % nv;
-        return Err(Error::input(
-            file,
-            Location::None,
-            format!(
-                "node {v} (column {}, row {}{}) is both held by the skull{} and moved by the jaw",
-                s as usize % (nc + 1),
-                s as usize / (nc + 1),
-                if *v >= nv { ", inner layer" } else { "" },
-                if p.modiolus_radius > 0.0 {
-                    " (or the modiolus: make modiolus_radius smaller)"
-                } else {
-                    ""
-                }
-            ),
-        ));
-    }
-    let sets = &mut mesh.node_sets;
-    sets.insert("skull".into(), skull);
-    sets.insert("jaw".into(), jaw);
-    sets.insert("upper_lip_inner".into(), upper_lip);
-    sets.insert("lower_lip_inner".into(), lower_lip);
-    let es = &mut mesh.element_sets;
-    let up = es.get("upper_face").cloned().unwrap_or_default();
-    let low = es.get("lower_face").cloned().unwrap_or_default();
-    let mut tissue: Vec<u32> = up.iter().chain(low.iter()).copied().collect();
-    tissue.sort_unstable();
-    es.insert("tissue_upper".into(), up);
-    es.insert("tissue_lower".into(), low);
-    es.insert("tissue".into(), tissue);
-
-    let depth = 0.5 * p.thickness;
-    let radius = (p.muscle_reach.powi(2) + depth * depth).sqrt();
-    let muscles = d
-        .muscles
-        .iter()
-        .map(|m: &MuscleLandmarks| Muscle {
-            name: m.name.clone(),
-            origin: [m.origin[0], m.origin[1], m.origin[2] - depth],
-            insertion: [m.insertion[0], m.insertion[1], m.insertion[2] - depth],
-            radius,
-            strength: p.muscle_strength,
-            activation: 0.0,
-            curve: LoadCurve {
-                shape: LoadShape::SmoothStep,
-                start: 0.0,
-                duration: 0.1,
-            },
-        })
-        .collect();
+    let sets = node_sets(&l, &surface.vertices, &row, &jaw_weight, &cols, p, file)?;
+    let across = saliva_axes(&l, &surface.vertices, p.commissure);
+    let node_sets = &mut mesh.node_sets;
+    node_sets.insert("skull".into(), sets.skull);
+    node_sets.insert("jaw".into(), sets.jaw);
+    node_sets.insert("upper_lip_inner".into(), sets.upper_lip);
+    node_sets.insert("lower_lip_inner".into(), sets.lower_lip);
+    add_tissue_sets(&mut mesh.element_sets);
+    let muscles = face_muscles(&d.muscles, p);
     let targets = d
         .targets
         .iter()
@@ -1043,32 +1300,7 @@ pub fn build(src: &FaceSource, p: &FaceParams, file: &str) -> Result<FaceModel> 
             (k.clone(), v)
         })
         .collect();
-    let mut notes = vec![format!(
-        "resolution {}: {} columns ({} between the corners), {} rows ({} below the saliva row, {} above); \
-         {} hexahedra, {} nodes; {} lip columns",
-        p.resolution,
-        nc,
-        nm,
-        nr,
-        rb,
-        ra,
-        mesh.elements.len(),
-        mesh.nodes.len(),
-        cols.x.len()
-    )];
-    match layer.thickness {
-        Some(t) => notes.push(format!(
-            "every saliva element is {:.3} mm thick across the layer; the lip lines moved up or down by at most {:.3} mm from the contours",
-            1e3 * t,
-            1e3 * layer.largest_shift
-        )),
-        None if layer.widened > 0 => notes.push(format!(
-            "the saliva row was widened to {} mm at {} columns where the lip contours are closer (the corners)",
-            1e3 * gap,
-            layer.widened
-        )),
-        None => {}
-    }
+    let notes = model_notes(p, &grid, &mesh, cols.x.len(), &layer);
     Ok(FaceModel {
         params: p.clone(),
         grid,

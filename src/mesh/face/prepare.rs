@@ -52,7 +52,7 @@ use super::topology::{self, edge, Adjacency, Edge};
 use crate::control::CancelToken;
 use crate::error::{Error, Location, Result};
 use crate::linalg::{cross, dist, norm, unit};
-use crate::mesh::surface::{PolySurface, QuadSurface};
+use crate::mesh::surface::{PolySurface, QuadSurface, Refined};
 use std::collections::{BTreeMap, BTreeSet};
 
 /// Loops whose opening is within this factor of the smallest are where the lips touch; the
@@ -277,6 +277,15 @@ impl FaceRig {
     /// The file the rig's errors name: the rig's own, else `head` (a rig made in code).
     fn error_file<'a>(&'a self, head: &'a str) -> &'a str {
         self.file.as_deref().unwrap_or(head)
+    }
+
+    /// The name its errors give field `name`: the name in the rig's own file, `rig.NAME`
+    /// where its errors name the head's file.
+    fn error_field(&self, name: &str) -> String {
+        match self.file {
+            Some(_) => name.to_string(),
+            None => format!("rig.{name}"),
+        }
     }
 }
 
@@ -657,30 +666,16 @@ pub fn prepare(
     prepare_with(head, rig, frame, params, file, &CancelToken::new())
 }
 
-/// [`prepare`], stopped by `cancel` while it looks for the lips.
-pub fn prepare_with(
-    head: &PolySurface,
-    rig: &FaceRig,
-    frame: InputFrame,
-    params: &PrepareParams,
-    file: &str,
-    cancel: &CancelToken,
-) -> Result<FaceSource> {
-    frame.check(file)?;
-    check_head_size(head, file)?;
-    // the rig's errors name its file and field (or the head's file and `rig.FIELD`)
+/// Checks that the rig's arrays over the head's vertices (jaw weights, blend shapes) have
+/// one entry for each of its `nv_in` vertices.
+fn check_rig_lengths(rig: &FaceRig, nv_in: usize, file: &str) -> Result<()> {
     let rig_file = rig.error_file(file);
-    let rig_field = |name: &str| match rig.file {
-        Some(_) => name.to_string(),
-        None => format!("rig.{name}"),
-    };
-    let nv_in = head.vertices.len();
     for (name, len) in [("jaw_weight", rig.jaw_weight.as_ref().map(|w| w.len()))] {
         if let Some(n) = len {
             if n != nv_in {
                 return Err(Error::field(
                     rig_file,
-                    rig_field(name),
+                    rig.error_field(name),
                     format!("has {n} values for {nv_in} vertices"),
                 ));
             }
@@ -690,12 +685,21 @@ pub fn prepare_with(
         if t.len() != nv_in {
             return Err(Error::field(
                 rig_file,
-                rig_field(&format!("targets.{name}")),
+                rig.error_field(&format!("targets.{name}")),
                 format!("has {} offsets for {nv_in} vertices", t.len()),
             ));
         }
     }
-    // into metres and the model frame, then quads (a triangle becomes three)
+    Ok(())
+}
+
+/// The head in metres and the model frame, checked (a valid surface, one piece, facing
+/// outward), and the same split into quads (a triangle becomes three).
+fn head_in_model_frame(
+    head: &PolySurface,
+    frame: &InputFrame,
+    file: &str,
+) -> Result<(PolySurface, Refined)> {
     let mut head_model = head.clone();
     for v in head_model.vertices.iter_mut() {
         *v = frame.point(*v);
@@ -704,16 +708,33 @@ pub fn prepare_with(
     check_one_piece(&head_model, file)?;
     check_orientation(&head_model, file)?;
     let refined = head_model.to_quads();
-    let s = refined.surface.clone();
-    s.validate(file)?;
-    let adj = Adjacency::new(&s);
+    Ok((head_model, refined))
+}
+
+/// The inner lip contour on `s` (the head split into quads, `refined` says how) and how it
+/// was found: from the rig's `upper_lip` and `lower_lip` where it names them, else the closed
+/// edge loop (module docs), else (or where the head was not all quads) the lips' front
+/// edges. Fails if the rig names one list only or a vertex the head does not have (`nv_in`
+/// vertices), or if no contour is found.
+#[allow(clippy::too_many_arguments)]
+fn lip_contour(
+    s: &QuadSurface,
+    adj: &Adjacency,
+    refined: &Refined,
+    rig: &FaceRig,
+    nv_in: usize,
+    params: &PrepareParams,
+    file: &str,
+    cancel: &CancelToken,
+) -> Result<(Contour, &'static str)> {
+    let rig_file = rig.error_file(file);
     let named = match (&rig.upper_lip, &rig.lower_lip) {
         (Some(u), Some(l)) => {
             for (name, list) in [("upper_lip", u), ("lower_lip", l)] {
                 if let Some(v) = list.iter().find(|&&v| v as usize >= nv_in) {
                     return Err(Error::field(
                         rig_file,
-                        rig_field(name),
+                        rig.error_field(name),
                         format!(
                             "vertex {v} is out of range: the head has {nv_in} vertices (0-based)"
                         ),
@@ -726,7 +747,7 @@ pub fn prepare_with(
         _ => {
             return Err(Error::field(
                 rig_file,
-                rig_field(if rig.upper_lip.is_some() {
+                rig.error_field(if rig.upper_lip.is_some() {
                     "lower_lip"
                 } else {
                     "upper_lip"
@@ -735,27 +756,30 @@ pub fn prepare_with(
             ))
         }
     };
-    let (contour, how) = if let Some((u, l)) = named {
+    Ok(if let Some((u, l)) = named {
         (
-            super::lips::contour_from_lists(&s, &adj, u, l, rig_file, &rig_field(""))?,
+            super::lips::contour_from_lists(s, adj, u, l, rig_file, &rig.error_field(""))?,
             "the rig's upper_lip and lower_lip",
         )
     } else if refined.parents.is_empty() {
-        match find_contour(&s, &adj, params, file, cancel) {
+        match find_contour(s, adj, params, file, cancel) {
             Ok(c) => (c, "the closed edge loop"),
             Err(e @ Error::Cancelled(_)) => return Err(e),
             Err(loops) => (
-                find_contour_general(&s, &adj, params, file).map_err(|_| loops)?,
+                find_contour_general(s, adj, params, file).map_err(|_| loops)?,
                 "the lips' front edges (no closed edge loop fits)",
             ),
         }
     } else {
         (
-            find_contour_general(&s, &adj, params, file)?,
+            find_contour_general(s, adj, params, file)?,
             "the lips' front edges",
         )
-    };
+    })
+}
 
+/// The contour's edges; fails if one of them does not join exactly two quads.
+fn ring_edges(contour: &Contour, adj: &Adjacency, file: &str) -> Result<BTreeSet<Edge>> {
     let ring_edges: BTreeSet<Edge> = contour
         .upper
         .windows(2)
@@ -777,28 +801,45 @@ pub fn prepare_with(
             ));
         }
     }
-    // a fold of a line near a corner trimmed (the loop's edges above still separate)
-    let (contour, trimmed) = match super::lips::trim_folds(&s, &contour.upper, &contour.lower) {
-        Ok(None) => (contour, None),
-        Ok(Some(t)) => (
+    Ok(ring_edges)
+}
+
+/// The contour with a fold of a line near a corner trimmed ([`super::lips::trim_folds`]; the
+/// loop's edges still separate), and what was trimmed (`None`: nothing).
+fn trim_contour(
+    s: &QuadSurface,
+    contour: Contour,
+    file: &str,
+) -> Result<(Contour, Option<super::lips::Trimmed>)> {
+    match super::lips::trim_folds(s, &contour.upper, &contour.lower) {
+        Ok(None) => Ok((contour, None)),
+        Ok(Some(t)) => Ok((
             Contour {
                 upper: t.upper.clone(),
                 lower: t.lower.clone(),
                 ..contour
             },
             Some(t),
-        ),
-        Err(what) => {
-            return Err(Error::input(
-                file,
-                Location::None,
-                format!("{what}; {}", super::lips::NAME_THE_LIPS),
-            ))
-        }
-    };
+        )),
+        Err(what) => Err(Error::input(
+            file,
+            Location::None,
+            format!("{what}; {}", super::lips::NAME_THE_LIPS),
+        )),
+    }
+}
+
+/// The side of the contour the lips' outer faces are on: of the parts the contour's edges
+/// cut `s` into, the largest touching the contour. Gives whether each quad is on it, and
+/// whether the contour separates (touches two parts or more).
+fn outside_of(
+    s: &QuadSurface,
+    adj: &Adjacency,
+    ring_edges: &BTreeSet<Edge>,
+    file: &str,
+) -> Result<(Vec<bool>, bool)> {
     let all = vec![true; s.quads.len()];
-    let sides = topology::components(&s, &adj, &all, &ring_edges);
-    // the side of the contour the lips' outer faces are on: the larger component
+    let sides = topology::components(s, adj, &all, ring_edges);
     let ring_quads: BTreeSet<u32> = ring_edges
         .iter()
         .flat_map(|e| adj.edge_quads[e].iter().copied())
@@ -817,7 +858,12 @@ pub fn prepare_with(
     for &q in outside {
         in_outside[q as usize] = true;
     }
+    Ok((in_outside, separates))
+}
 
+/// The mouth's centre (midway between the corners, the upper contour's ends, at the front of
+/// the contour's vertices) and the corners' distance.
+fn mouth_centre(s: &QuadSurface, contour: &Contour) -> ([f64; 3], f64) {
     let pu = |v: u32| s.vertices[v as usize];
     let (cr, cl) = (pu(contour.upper[0]), pu(*contour.upper.last().unwrap()));
     let front = contour
@@ -827,7 +873,31 @@ pub fn prepare_with(
         .map(|&v| pu(v)[2])
         .fold(f64::NEG_INFINITY, f64::max);
     let centre = [0.5 * (cr[0] + cl[0]), 0.5 * (cr[1] + cl[1]), front];
-    check_upright(&s, centre, dist(&cr, &cl), frame.up, file)?;
+    (centre, dist(&cr, &cl))
+}
+
+/// The kept skin ([`keep_face`]).
+struct Kept {
+    /// Its quads, groups not yet set.
+    surf: QuadSurface,
+    /// The vertex of `s` each of its vertices is.
+    old_of: Vec<u32>,
+    /// The lip contours on it.
+    upper: Vec<u32>,
+    lower: Vec<u32>,
+}
+
+/// The kept skin: the quads of `s` on the outside (`in_outside`) whose centre lies in the box
+/// around `centre` (module docs), with the contour's lines on it. Fails if a contour vertex
+/// is not kept or a line turns back on itself seen from the front.
+fn keep_face(
+    s: &QuadSurface,
+    in_outside: &[bool],
+    centre: [f64; 3],
+    contour: &Contour,
+    params: &PrepareParams,
+    file: &str,
+) -> Result<Kept> {
     let in_box = |c: [f64; 3]| {
         (c[0] - centre[0]).abs() <= params.half_width
             && c[1] >= centre[1] - params.below
@@ -835,10 +905,9 @@ pub fn prepare_with(
             && c[2] >= centre[2] - params.behind
     };
     let keep: Vec<bool> = (0..s.quads.len())
-        .map(|q| in_outside[q] && in_box(quad_centre(&s, q)))
+        .map(|q| in_outside[q] && in_box(quad_centre(s, q)))
         .collect();
-    let mut notes = Vec::new();
-    let (mut surf, old_of) = topology::submesh(&s, &keep);
+    let (surf, old_of) = topology::submesh(s, &keep);
     let mut new_of = vec![u32::MAX; s.vertices.len()];
     for (n, &o) in old_of.iter().enumerate() {
         new_of[o as usize] = n as u32;
@@ -882,11 +951,21 @@ pub fn prepare_with(
             ));
         }
     }
-    // groups: above or below the mouth line
+    Ok(Kept {
+        surf,
+        old_of,
+        upper,
+        lower,
+    })
+}
+
+/// Sets the kept skin's groups: `upper_face` above the mouth line ([`mouth_line`]),
+/// `lower_face` below; drops its quad lines and notes.
+fn group_by_mouth_line(surf: &mut QuadSurface, upper: &[u32], lower: &[u32]) {
     surf.groups = vec!["upper_face".into(), "lower_face".into()];
     for q in 0..surf.quads.len() {
-        let c = quad_centre(&surf, q);
-        surf.group_of_quad[q] = if c[1] > mouth_line(&surf, &upper, &lower, c[0]) {
+        let c = quad_centre(surf, q);
+        surf.group_of_quad[q] = if c[1] > mouth_line(surf, upper, lower, c[0]) {
             0
         } else {
             1
@@ -894,8 +973,17 @@ pub fn prepare_with(
     }
     surf.quad_lines.clear();
     surf.notes.clear();
-    // the rig's arrays on the refined head's vertices (a new vertex: its parents' mean)
-    let mut jaw_weight: Vec<f64> = match &rig.jaw_weight {
+}
+
+/// The rig's jaw weights (0 where it has none) and blend shapes (model frame) on the kept
+/// vertices (`old_of`, on the refined head's vertices: a new vertex has its parents' mean).
+fn rig_on_kept(
+    rig: &FaceRig,
+    refined: &Refined,
+    old_of: &[u32],
+    frame: &InputFrame,
+) -> (Vec<f64>, BTreeMap<String, Vec<[f64; 3]>>) {
+    let jaw_weight: Vec<f64> = match &rig.jaw_weight {
         Some(w) => {
             let w = refined.extend_scalar(w);
             old_of.iter().map(|&o| w[o as usize]).collect()
@@ -916,10 +1004,21 @@ pub fn prepare_with(
             )
         })
         .collect();
-    let width = dist(
-        &surf.vertices[upper[0] as usize],
-        &surf.vertices[*upper.last().unwrap() as usize],
-    );
+    (jaw_weight, targets)
+}
+
+/// The jaw's hinge (a point and the unit axis, model frame): the rig's, or estimated from the
+/// mouth (`centre`, `width`; noted in `notes`) and the `+x` axis. Fails if the rig's point
+/// lies more than [`MAX_HINGE_DISTANCE`] from the mouth or its axis is not a direction.
+fn hinge(
+    rig: &FaceRig,
+    frame: &InputFrame,
+    centre: [f64; 3],
+    width: f64,
+    notes: &mut Vec<String>,
+    file: &str,
+) -> Result<([f64; 3], [f64; 3])> {
+    let rig_file = rig.error_file(file);
     let hinge_point = rig.hinge_point.map(|p| frame.point(p)).unwrap_or_else(|| {
         let h = estimated_hinge(centre, width);
         notes.push(format!(
@@ -942,7 +1041,7 @@ pub fn prepare_with(
         if !(d <= MAX_HINGE_DISTANCE) {
             return Err(Error::field(
                 rig_file,
-                rig_field("hinge_point"),
+                rig.error_field("hinge_point"),
                 format!(
                     "lies {d:.3e} m from the mouth's centre (at most {MAX_HINGE_DISTANCE} m: a jaw \
                      hinges about 0.1 m from the mouth); check the rig's units and axes against the head's"
@@ -956,7 +1055,7 @@ pub fn prepare_with(
             if !u.iter().all(|x| x.is_finite()) {
                 return Err(Error::field(
                     rig_file,
-                    rig_field("hinge_axis"),
+                    rig.error_field("hinge_axis"),
                     format!("must be a finite direction of non-zero length, got {a:?}"),
                 ));
             }
@@ -964,23 +1063,14 @@ pub fn prepare_with(
         }
         None => [1.0, 0.0, 0.0],
     };
-    // muscles from the mouth's landmarks
+    Ok((hinge_point, hinge_axis))
+}
+
+/// The muscles' landmarks from the mouth's (`centre`, `width`): each anchor of
+/// [`muscle_anchors`] on each side, scaled by the mouth's width over 50 mm, on the kept skin.
+fn muscle_landmarks(surf: &QuadSurface, centre: [f64; 3], width: f64) -> Vec<MuscleLandmarks> {
     let scale = width / 0.05;
-    // without the rig's weights, the jaw's share of each vertex's motion from where it is
-    let estimate = |p: &[f64; 3]| estimated_jaw_weight(p, centre, width, hinge_point);
-    let head_jaw: Vec<f64> = match &rig.jaw_weight {
-        Some(w) => w.clone(),
-        None => {
-            jaw_weight = surf.vertices.iter().map(estimate).collect();
-            let n = jaw_weight.iter().filter(|&&w| w >= 0.5).count();
-            notes.push(format!(
-                "no jaw weights given: estimated from the mouth ({JAW_WEIGHT_MAX} below it, fading from {JAW_FROM} to {JAW_TO} mouth widths under its centre, deeper under the corners and higher beyond them as on the MakeHuman rig, and over half a width in front of the hinge); {n} of {} kept vertices at 0.5 or more",
-                jaw_weight.len()
-            ));
-            head_model.vertices.iter().map(estimate).collect()
-        }
-    };
-    let skin_z = |x: f64, y: f64| -> f64 { surface_height(&surf, x, y) };
+    let skin_z = |x: f64, y: f64| -> f64 { surface_height(surf, x, y) };
     let mut muscles = Vec::new();
     for (name, o, ins) in muscle_anchors() {
         for (side, sign) in [("l", 1.0), ("r", -1.0)] {
@@ -996,6 +1086,41 @@ pub fn prepare_with(
             });
         }
     }
+    muscles
+}
+
+/// What [`prepare_notes`] reports of how the face was made.
+struct HowMade<'a> {
+    /// The input head, its faces counted.
+    head: &'a PolySurface,
+    /// The head split into quads (`s`) and what the split added.
+    refined: &'a Refined,
+    s: &'a QuadSurface,
+    /// How the contour was found, the contour, whether it separates, what was trimmed.
+    how: &'a str,
+    contour: &'a Contour,
+    separates: bool,
+    trimmed: Option<&'a super::lips::Trimmed>,
+    /// The kept skin and the mouth's width.
+    kept: &'a Kept,
+    width: f64,
+}
+
+/// Adds to `notes` (the hinge's and the jaw weights' notes so far) the notes of the split into
+/// quads and of the contour (first), of the trimmed folds, and of the kept skin (last).
+fn prepare_notes(notes: &mut Vec<String>, m: &HowMade, params: &PrepareParams) {
+    let HowMade {
+        head,
+        refined,
+        s,
+        how,
+        contour,
+        separates,
+        trimmed,
+        kept,
+        width,
+    } = m;
+    let (surf, upper, lower) = (&kept.surf, &kept.upper, &kept.lower);
     if !refined.parents.is_empty() {
         notes.insert(
             0,
@@ -1019,10 +1144,10 @@ pub fn prepare_with(
             upper.len() - 1,
             lower.len() - 1,
             1e3 * width,
-            if separates { "separates the mouth interior from" } else { "does not separate an interior from" }
+            if *separates { "separates the mouth interior from" } else { "does not separate an interior from" }
         ),
     );
-    if let Some(t) = &trimmed {
+    if let Some(t) = trimmed {
         notes.insert(
             1 + usize::from(!refined.parents.is_empty()),
             format!(
@@ -1046,6 +1171,77 @@ pub fn prepare_with(
         1e3 * params.above,
         1e3 * params.behind,
     ));
+}
+
+/// [`prepare`], stopped by `cancel` while it looks for the lips.
+pub fn prepare_with(
+    head: &PolySurface,
+    rig: &FaceRig,
+    frame: InputFrame,
+    params: &PrepareParams,
+    file: &str,
+    cancel: &CancelToken,
+) -> Result<FaceSource> {
+    frame.check(file)?;
+    check_head_size(head, file)?;
+    // the rig's errors name its file and field (or the head's file and `rig.FIELD`)
+    let nv_in = head.vertices.len();
+    check_rig_lengths(rig, nv_in, file)?;
+    // into metres and the model frame, then quads (a triangle becomes three)
+    let (head_model, refined) = head_in_model_frame(head, &frame, file)?;
+    let s = refined.surface.clone();
+    s.validate(file)?;
+    let adj = Adjacency::new(&s);
+    let (contour, how) = lip_contour(&s, &adj, &refined, rig, nv_in, params, file, cancel)?;
+    let ring_edges = ring_edges(&contour, &adj, file)?;
+    let (contour, trimmed) = trim_contour(&s, contour, file)?;
+    let (in_outside, separates) = outside_of(&s, &adj, &ring_edges, file)?;
+    let (centre, corners_apart) = mouth_centre(&s, &contour);
+    check_upright(&s, centre, corners_apart, frame.up, file)?;
+    let mut notes = Vec::new();
+    let mut kept = keep_face(&s, &in_outside, centre, &contour, params, file)?;
+    group_by_mouth_line(&mut kept.surf, &kept.upper, &kept.lower);
+    let (mut jaw_weight, targets) = rig_on_kept(rig, &refined, &kept.old_of, &frame);
+    let surf = &kept.surf;
+    let width = dist(
+        &surf.vertices[kept.upper[0] as usize],
+        &surf.vertices[*kept.upper.last().unwrap() as usize],
+    );
+    let (hinge_point, hinge_axis) = hinge(rig, &frame, centre, width, &mut notes, file)?;
+    // without the rig's weights, the jaw's share of each vertex's motion from where it is
+    let estimate = |p: &[f64; 3]| estimated_jaw_weight(p, centre, width, hinge_point);
+    let head_jaw: Vec<f64> = match &rig.jaw_weight {
+        Some(w) => w.clone(),
+        None => {
+            jaw_weight = surf.vertices.iter().map(estimate).collect();
+            let n = jaw_weight.iter().filter(|&&w| w >= 0.5).count();
+            notes.push(format!(
+                "no jaw weights given: estimated from the mouth ({JAW_WEIGHT_MAX} below it, fading from {JAW_FROM} to {JAW_TO} mouth widths under its centre, deeper under the corners and higher beyond them as on the MakeHuman rig, and over half a width in front of the hinge); {n} of {} kept vertices at 0.5 or more",
+                jaw_weight.len()
+            ));
+            head_model.vertices.iter().map(estimate).collect()
+        }
+    };
+    // muscles from the mouth's landmarks
+    let muscles = muscle_landmarks(surf, centre, width);
+    let how_made = HowMade {
+        head,
+        refined: &refined,
+        s: &s,
+        how,
+        contour: &contour,
+        separates,
+        trimmed: trimmed.as_ref(),
+        kept: &kept,
+        width,
+    };
+    prepare_notes(&mut notes, &how_made, params);
+    let Kept {
+        surf,
+        old_of,
+        upper,
+        lower,
+    } = kept;
     let data = FaceData {
         source: rig.source.clone(),
         units: "m".into(),
