@@ -9,8 +9,8 @@
 //! checked there, not by the reader, which keeps the file's order).
 #![no_main]
 use libfuzzer_sys::fuzz_target;
-use sticky_lips::io::keys::parse_keys;
 use sticky_lips::boundary::Keyframes;
+use sticky_lips::io::keys::parse_keys;
 
 const FPS: [Option<f64>; 8] = [
     None,

@@ -156,7 +156,9 @@ fn surface(data: &[u8]) -> PolySurface {
 fuzz_target!(|data: &[u8]| {
     let head = surface(data);
     let params = PrepareParams::default();
-    if let Ok(a) = face::lips::detect_axes(&head, 1e-3, &params, "fuzz/head.obj", &Default::default()) {
+    if let Ok(a) =
+        face::lips::detect_axes(&head, 1e-3, &params, "fuzz/head.obj", &Default::default())
+    {
         let dot = |p: [f64; 3], q: [f64; 3]| p[0] * q[0] + p[1] * q[1] + p[2] * q[2];
         assert!((dot(a.up, a.up) - 1.0).abs() < 1e-9, "{a:?}");
         assert!((dot(a.forward, a.forward) - 1.0).abs() < 1e-9, "{a:?}");
@@ -168,7 +170,7 @@ fuzz_target!(|data: &[u8]| {
         forward: [0.0, 0.0, 1.0],
     };
     let rig = FaceRig::default();
-    if let Ok(src) = face::prepare(&head, &rig, frame, &params, "fuzz/head.obj", &Default::default()) {
+    if let Ok(src) = face::prepare(&head, &rig, frame, &params, "fuzz/head.obj") {
         let nv = src.surface.vertices.len();
         for line in [&src.data.upper_contour, &src.data.lower_contour] {
             assert!(

@@ -21,8 +21,7 @@ fuzz_target!(|data: &[u8]| {
     let Ok(t) = extrude::group_thickness(&s, Some(0.001), &[], "fuzz.obj") else {
         return;
     };
-    if let Ok(mesh) = extrude::extrude_with(&s, &|g| t[g], extrude::Direction::Normal, "fuzz.obj")
-    {
+    if let Ok(mesh) = extrude::extrude_with(&s, &|g| t[g], extrude::Direction::Normal, "fuzz.obj") {
         let _ = mesh.validate("fuzz.obj");
     }
 });
