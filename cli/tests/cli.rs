@@ -9,6 +9,15 @@ use std::path::{Path, PathBuf};
 /// A small valid scenario (its first line is a comment), shared with `verification/inputs.rs`.
 const GOOD_TOML: &str = include_str!("../../verification/small_block.toml");
 
+/// Waits (at most 60 s) until the run writing into `out` has written its second frame.
+fn wait_for_second_frame(out: &Path) {
+    let t0 = std::time::Instant::now();
+    while !out.join("frame_000001.vtu").exists() {
+        assert!(t0.elapsed().as_secs() < 60, "no second frame within 60 s");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}
+
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .parent()
@@ -151,11 +160,7 @@ fn interrupted_runs_leave_complete_frames_and_say_where_they_stopped() {
             .spawn()
             .unwrap();
         // wait for the second frame, then signal
-        let t0 = std::time::Instant::now();
-        while !out.join("frame_000001.vtu").exists() {
-            assert!(t0.elapsed().as_secs() < 60, "no second frame within 60 s");
-            std::thread::sleep(std::time::Duration::from_millis(20));
-        }
+        wait_for_second_frame(&out);
         for _ in 0..1 + usize::from(twice) {
             let kill = Command::new("kill")
                 .args([format!("-{signal}"), child.id().to_string()])
@@ -256,11 +261,7 @@ fn progress_json_lines_rise_to_the_end_and_close_with_the_outcome() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let t0 = std::time::Instant::now();
-    while !out.join("frame_000001.vtu").exists() {
-        assert!(t0.elapsed().as_secs() < 60, "no second frame within 60 s");
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
+    wait_for_second_frame(&out);
     let kill = Command::new("kill")
         .args(["-INT", &child.id().to_string()])
         .status()
