@@ -339,20 +339,18 @@ impl<T: SimdReal> Simulation<T> {
             self.assemble_external_at(t);
         }
         let r = has_loads.then_some(self.r_ext.as_slice());
-        if let Some(n) = node_update_listed(
-            &sub.slow_nodes,
+        // every node in one pass (the fast nodes' values, from the slow elements' forces
+        // alone, are not used: step 3 puts the substeps' back), straight into `u_next`
+        if let Some(n) = node_update(
             &sub.slow_gather,
             &self.cd,
             &sub.slow_f,
             r,
             &self.u,
             &self.u_prev,
-            &mut sub.slow_next,
+            &mut self.u_next,
         ) {
             return Err(diverged(s, t, None, Some(n)));
-        }
-        for (&n, v) in sub.slow_nodes.iter().zip(&sub.slow_next) {
-            self.u_next[n as usize] = *v;
         }
         apply_constraints_into(
             &self.disc,
@@ -435,11 +433,16 @@ impl<T: SimdReal> Simulation<T> {
             self.saliva.copy_from(&sub.saliva_start);
             return Err(e);
         }
-        // 3. the slow nodes to t_n + dt
-        for &n in &sub.slow_nodes {
+        // 3. the slow nodes to t_n + dt: the buffers rotate (u_prev <- u <- u_next) as in a
+        // single-rate step, then the fast nodes (already at t_n + dt) take back their own
+        // state: `u` from the old `u` (now `u_prev`), `u_prev` from the old `u_prev` (now
+        // `u_next`)
+        std::mem::swap(&mut self.u_prev, &mut self.u);
+        std::mem::swap(&mut self.u, &mut self.u_next);
+        for &n in &sub.fast_nodes {
             let n = n as usize;
-            self.u_prev[n] = self.u[n];
-            self.u[n] = self.u_next[n];
+            self.u[n] = self.u_prev[n];
+            self.u_prev[n] = self.u_next[n];
         }
         self.step += 1;
         Ok(())

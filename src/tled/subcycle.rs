@@ -62,12 +62,11 @@ pub struct Subcycling<T> {
     pub fast_constraints: ConstraintPlan,
     /// Central-difference coefficients of the substep `dt / k`.
     pub fast_cd: CentralDifference<T>,
-    /// Scratch: force blocks of each partition, new displacements of each node list, the
+    /// Scratch: force blocks of each partition, the fast nodes' new displacements, the
     /// interface's start values, and the fast nodes' state at the step's start (restored on
     /// divergence).
     pub slow_f: Vec<[[T; 3]; 8]>,
     pub fast_f: Vec<[[T; 3]; 8]>,
-    pub slow_next: Vec<[T; 3]>,
     pub fast_next: Vec<[T; 3]>,
     pub interface_start: Vec<[T; 3]>,
     pub fast_u_start: Vec<[T; 3]>,
@@ -124,14 +123,13 @@ impl<T: Real> Subcycling<T> {
             .iter()
             .map(|g| g.decay.factor(h))
             .collect();
-        let (ns, nf, ni) = (slow_nodes.len(), fast_nodes.len(), interface.len());
+        let (nf, ni) = (fast_nodes.len(), interface.len());
         Subcycling {
             k,
             fast_constraints: d.constraints.restricted_to(&is_fast),
             fast_cd: CentralDifference::new(h, alpha, &d.mass),
             slow_f: vec![[[T::ZERO; 3]; 8]; slow_el.len()],
             fast_f: vec![[[T::ZERO; 3]; 8]; fast_el.len()],
-            slow_next: vec![[T::ZERO; 3]; ns],
             fast_next: vec![[T::ZERO; 3]; nf],
             interface_start: vec![[T::ZERO; 3]; ni],
             fast_u_start: vec![[T::ZERO; 3]; nf],
