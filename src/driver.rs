@@ -320,12 +320,27 @@ fn run_with<S: Stepper>(
         };
         (writer, history, None)
     };
+    // the animation files gathered while the frames are recorded (a restarted run's earlier
+    // frames are only on disk: its export reads them back)
+    let mut recorder = match (&problem.physics.skin, opts.export, restarted_from) {
+        (Some(_), true, None) => Some(crate::export::Recorder::new(
+            problem.mesh.elements.len(),
+            &saliva_elements,
+        )),
+        _ => None,
+    };
     let problem_hash = checkpoint_every.map(|_| checkpoint::problem_hash(problem));
     // absolute, so that `run --restart DIR` finds the input from any directory
     let input = std::fs::canonicalize(&problem.source)
         .map_or_else(|_| problem.source.clone(), |p| p.display().to_string());
     if restarted_from.is_none() {
-        record(&mut sim, &mut writer, &mut history, problem)?;
+        record(
+            &mut sim,
+            &mut writer,
+            &mut history,
+            recorder.as_mut(),
+            problem,
+        )?;
     }
     let n = sim.num_steps();
     let start_step = sim.step_index();
@@ -374,7 +389,13 @@ fn run_with<S: Stepper>(
         sim.advance(chunk)?;
         stepping += ts.elapsed().as_secs_f64();
         if chunk == to_frame || sim.is_finished() {
-            record(&mut sim, &mut writer, &mut history, problem)?;
+            record(
+                &mut sim,
+                &mut writer,
+                &mut history,
+                recorder.as_mut(),
+                problem,
+            )?;
         }
         if chunk == to_checkpoint && !sim.is_finished() {
             write_checkpoint(&sim, &mut writer, &mut history, stepping)?;
@@ -398,10 +419,14 @@ fn run_with<S: Stepper>(
     // an interrupted run stops here: its token is cancelled, so the export would refuse at
     // once and take the summary with it (`sticky-lips export` writes the files from its frames)
     if let (Some(skin), true, None) = (&problem.physics.skin, opts.export, &interrupted) {
-        // from the frames on disk: every one handed over first
+        // every frame handed over first; the files from the frames gathered while running,
+        // else from the frames on disk
         writer.flush()?;
         if writer.frames_written() > 0 {
-            summary.export = Some(crate::export::export_with(skin, &opts.out, &opts.cancel)?);
+            summary.export = Some(match recorder {
+                Some(r) if r.len() == writer.frames_written() => r.finish(skin, &opts.out)?,
+                _ => crate::export::export_with(skin, &opts.out, &opts.cancel)?,
+            });
         }
     }
     if let Some(i) = interrupted {
@@ -506,6 +531,7 @@ fn record<S: Stepper>(
     sim: &mut S,
     writer: &mut FrameWriter,
     history: &mut RunHistory,
+    recorder: Option<&mut crate::export::Recorder>,
     problem: &Problem,
 ) -> Result<()> {
     let u = sim.displacement_f64()?;
@@ -541,6 +567,9 @@ fn record<S: Stepper>(
         });
     }
     history.last_frame_hash = Some(checkpoint::displacement_hash(u.as_flattened()));
+    if let (Some(r), Some(skin)) = (recorder, &problem.physics.skin) {
+        r.push(skin, sim.time(), &u, saliva.as_ref());
+    }
     writer.frame(Frame {
         time: sim.time(),
         u,
@@ -640,6 +669,52 @@ mod tests {
         );
         let e = crate::export::export(p.physics.skin.as_ref().unwrap(), &out).unwrap();
         assert_eq!(e.frames, frames);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// The animation files the driver gathers while running are byte for byte those that
+    /// `export` writes afterwards from the run's frame files (the frames hold the same `f64`
+    /// displacements and saliva state), on a face with a saliva layer that breaks.
+    #[test]
+    fn the_files_gathered_while_running_equal_those_read_back_from_the_frames() {
+        let dir = std::env::temp_dir().join(format!("sticky-lips-recorder-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let text = "[mesh]\ngenerator = \"face\"\n[mesh.face]\nresolution = 0.25\n\
+            [[materials]]\nname = \"tissue\"\nelements = \"tissue\"\nmu = 800.0\nK = 7000.0\ndensity = 1050.0\n\
+            [[materials]]\nname = \"saliva\"\nelements = \"saliva\"\nmu = 7700.0\nK = 191000.0\ndensity = 1050.0\n\
+            [[saliva]]\nmaterial = \"saliva\"\ncritical_moisture = 100.0\ninitial_moisture = 100.0\nk_glue = 0.1\n\
+            [[fix]]\nnodes = \"skull\"\n[jaw]\nangle = 0.15\nduration = 0.2\n\
+            [time]\ndt = \"auto\"\ntotal = 0.3\noutput_interval = 0.01\n";
+        let p = crate::io::scenario::parse(text, &dir.join("open.toml"))
+            .unwrap()
+            .problem;
+        let out = dir.join("run");
+        let s = run(&p, &RunOptions::new(&out, Precision::F64, 2)).unwrap();
+        let gathered = s.export.expect("a face run exports");
+        assert_eq!(gathered.read_seconds, 0.0, "read back from disk");
+        assert!(gathered.saliva_faces > 0);
+        let usda = std::fs::read_to_string(out.join("skin.usda")).unwrap();
+        let broken = usda.split("primvars:broken.timeSamples").nth(1).unwrap();
+        let broken = broken.split('}').next().unwrap();
+        assert!(broken.contains("1.0"), "no saliva element broke");
+        let names = ["skin.obj", "skin.pc2", "skin.mdd", "skin.usda"];
+        let files: Vec<Vec<u8>> = names
+            .iter()
+            .map(|n| std::fs::read(out.join(n)).unwrap())
+            .collect();
+        for n in names {
+            std::fs::remove_file(out.join(n)).unwrap();
+        }
+        let e = crate::export::export(p.physics.skin.as_ref().unwrap(), &out).unwrap();
+        assert!(e.read_seconds > 0.0);
+        assert_eq!(e.frames, gathered.frames);
+        for (n, bytes) in names.iter().zip(&files) {
+            assert!(
+                std::fs::read(out.join(n)).unwrap() == *bytes,
+                "{n} differs from the one read back"
+            );
+        }
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

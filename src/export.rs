@@ -167,6 +167,65 @@ struct Frames {
     moisture: Vec<Vec<f32>>,
 }
 
+impl Frames {
+    fn new(capacity: usize) -> Self {
+        Frames {
+            skin: Vec::with_capacity(capacity),
+            saliva_quads: Vec::new(),
+            saliva_pts: Vec::with_capacity(capacity),
+            broken: Vec::new(),
+            moisture: Vec::new(),
+        }
+    }
+
+    /// Adds frame `k` at time `t`: nodal displacements `u` (every model node), and the cell
+    /// arrays `saliva_broken` (-1 on elements that are not saliva) and `saliva_moisture`
+    /// (`None`: the model has no saliva layer).
+    fn push(
+        &mut self,
+        skin: &Skin,
+        t: f64,
+        u: &[[f64; 3]],
+        broken: Option<&[f64]>,
+        moisture: Option<&[f64]>,
+    ) {
+        let fr = &skin.frame;
+        self.skin
+            .push(skin.positions(u, t).into_iter().map(to32).collect());
+        // the saliva layer: the model quads whose element is a saliva element
+        if self.skin.len() == 1 {
+            if let Some(b) = broken {
+                self.saliva_quads = (0..skin.model.quads.len().min(b.len()))
+                    .filter(|&q| b[q] >= 0.0)
+                    .collect();
+            }
+        }
+        if !self.saliva_quads.is_empty() {
+            let (b, m) = (broken.unwrap_or_default(), moisture.unwrap_or_default());
+            self.broken.push(
+                self.saliva_quads
+                    .iter()
+                    .map(|&q| b.get(q).copied().unwrap_or(0.0) as f32)
+                    .collect(),
+            );
+            self.moisture.push(
+                self.saliva_quads
+                    .iter()
+                    .map(|&q| m.get(q).copied().unwrap_or(f64::NAN) as f32)
+                    .collect(),
+            );
+            self.saliva_pts.push(
+                skin.model
+                    .vertices
+                    .iter()
+                    .zip(u)
+                    .map(|(x, d)| to32(fr.to_user([x[0] + d[0], x[1] + d[1], x[2] + d[2]])))
+                    .collect(),
+            );
+        }
+    }
+}
+
 /// Reads frames `entries` of `dir`: each frame's displacements (checked) carried onto the
 /// skin, and the saliva layer's state. Stopped by `cancel` before each frame.
 fn read_frames(
@@ -175,14 +234,7 @@ fn read_frames(
     entries: &[(f64, String)],
     cancel: &crate::control::CancelToken,
 ) -> Result<Frames> {
-    let fr = &skin.frame;
-    let mut out = Frames {
-        skin: Vec::with_capacity(entries.len()),
-        saliva_quads: Vec::new(),
-        saliva_pts: Vec::with_capacity(entries.len()),
-        broken: Vec::new(),
-        moisture: Vec::new(),
-    };
+    let mut out = Frames::new(entries.len());
     let need = skin.max_node().map_or(0, |n| n as usize + 1);
     for (k, (t, file)) in entries.iter().enumerate() {
         cancel.check(|| {
@@ -193,45 +245,98 @@ fn read_frames(
         })?;
         let path = dir.join(file);
         let u = read_displacement(skin, &path, need)?;
-        out.skin
-            .push(skin.positions(&u, *t).into_iter().map(to32).collect());
-        // the saliva layer: the model quads whose element is a saliva element
-        let state = crate::io::vtu::read_cell_data(&path, "saliva_broken").ok();
-        if k == 0 {
-            if let Some((b, _, _)) = &state {
-                out.saliva_quads = (0..skin.model.quads.len().min(b.len()))
-                    .filter(|&q| b[q] >= 0.0)
-                    .collect();
-            }
-        }
-        if !out.saliva_quads.is_empty() {
-            let b = state.map(|s| s.0).unwrap_or_default();
-            let m = crate::io::vtu::read_cell_data(&path, "saliva_moisture")
+        let broken = crate::io::vtu::read_cell_data(&path, "saliva_broken")
+            .ok()
+            .map(|s| s.0);
+        let moisture = if k == 0 || !out.saliva_quads.is_empty() {
+            crate::io::vtu::read_cell_data(&path, "saliva_moisture")
+                .ok()
                 .map(|s| s.0)
-                .unwrap_or_default();
-            out.broken.push(
-                out.saliva_quads
-                    .iter()
-                    .map(|&q| b.get(q).copied().unwrap_or(0.0) as f32)
-                    .collect(),
-            );
-            out.moisture.push(
-                out.saliva_quads
-                    .iter()
-                    .map(|&q| m.get(q).copied().unwrap_or(f64::NAN) as f32)
-                    .collect(),
-            );
-            out.saliva_pts.push(
-                skin.model
-                    .vertices
-                    .iter()
-                    .zip(&u)
-                    .map(|(x, d)| to32(fr.to_user([x[0] + d[0], x[1] + d[1], x[2] + d[2]])))
-                    .collect(),
-            );
-        }
+        } else {
+            None
+        };
+        out.push(skin, *t, &u, broken.as_deref(), moisture.as_deref());
     }
     Ok(out)
+}
+
+/// The animation files of a run gathered frame by frame while it runs (the driver's export:
+/// nothing is read back from the frame files). Its files are byte for byte those that
+/// [`export`] writes from the same run's directory afterwards (the frames hold the same `f64`
+/// displacements and saliva state).
+pub struct Recorder {
+    frames: Frames,
+    times: Vec<f64>,
+    /// The model's element count and its saliva elements, to lay the saliva state out as
+    /// the frame files' cell arrays.
+    num_elements: usize,
+    saliva_elements: Vec<u32>,
+    broken: Vec<f64>,
+    moisture: Vec<f64>,
+}
+
+impl Recorder {
+    /// A recorder for a model of `num_elements` elements whose saliva elements are
+    /// `saliva_elements` (in the order of each frame's saliva state).
+    pub fn new(num_elements: usize, saliva_elements: &[u32]) -> Self {
+        Recorder {
+            frames: Frames::new(0),
+            times: Vec::new(),
+            num_elements,
+            saliva_elements: saliva_elements.to_vec(),
+            broken: Vec::new(),
+            moisture: Vec::new(),
+        }
+    }
+
+    /// Adds the frame at time `t` (after the previous one): displacements `u` of every model
+    /// node and the saliva state (`None`: no saliva layer).
+    pub fn push(
+        &mut self,
+        skin: &Skin,
+        t: f64,
+        u: &[[f64; 3]],
+        saliva: Option<&crate::io::output::SalivaFrame>,
+    ) {
+        let cells = saliva.map(|s| {
+            self.broken.clear();
+            self.broken.resize(self.num_elements, -1.0);
+            self.moisture.clear();
+            self.moisture.resize(self.num_elements, f64::NAN);
+            for (k, &e) in self.saliva_elements.iter().enumerate() {
+                self.broken[e as usize] = if s.broken[k] { 1.0 } else { 0.0 };
+                self.moisture[e as usize] = s.moisture[k];
+            }
+        });
+        let (b, m) = match cells {
+            Some(()) => (Some(self.broken.as_slice()), Some(self.moisture.as_slice())),
+            None => (None, None),
+        };
+        self.frames.push(skin, t, u, b, m);
+        self.times.push(t);
+    }
+
+    /// Frames added so far.
+    pub fn len(&self) -> usize {
+        self.times.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.times.is_empty()
+    }
+
+    /// Writes the files into `dir` (`export.json` included), as [`export`] does; `read_seconds`
+    /// is zero.
+    pub fn finish(self, skin: &Skin, dir: &Path) -> Result<ExportSummary> {
+        write_files(
+            skin,
+            dir,
+            self.frames,
+            &self.times,
+            0.0,
+            &crate::control::CancelToken::new(),
+        )
+    }
 }
 
 /// The nodal displacements of frame file `path`; fails unless they are 3 components at
@@ -331,10 +436,28 @@ pub fn export_with(
     let t0 = std::time::Instant::now();
     let entries = read_pvd(dir)?;
     check_frames_listed(&entries, dir)?;
-    let fr = &skin.frame;
     let times: Vec<f64> = entries.iter().map(|e| e.0).collect();
     let frames = read_frames(skin, dir, &entries, cancel)?;
-    let read_seconds = t0.elapsed().as_secs_f64();
+    write_files(
+        skin,
+        dir,
+        frames,
+        &times,
+        t0.elapsed().as_secs_f64(),
+        cancel,
+    )
+}
+
+/// Writes the animation files of `frames` (at `times`) and `export.json` into `dir`.
+fn write_files(
+    skin: &Skin,
+    dir: &Path,
+    frames: Frames,
+    times: &[f64],
+    read_seconds: f64,
+    cancel: &crate::control::CancelToken,
+) -> Result<ExportSummary> {
+    let fr = &skin.frame;
     let t1 = std::time::Instant::now();
     // the rest mesh in the user's units and axes
     let mut rest = skin.surface.clone();
@@ -344,8 +467,8 @@ pub fn export_with(
     let rest32: Vec<[f32; 3]> = rest.vertices.iter().map(|&p| to32(p)).collect();
     let (n_frames, saliva_faces) = (frames.skin.len(), frames.saliva_quads.len());
     let pc2 = pc2_bytes(&frames.skin, 0.0);
-    let mdd = mdd_bytes(&frames.skin, &times);
-    let usda = usda(skin, &rest32, frames, &times);
+    let mdd = mdd_bytes(&frames.skin, times);
+    let usda = usda(skin, &rest32, frames, times);
     let mut obj = Vec::new();
     crate::io::obj::write_polygons_to(&mut obj, &rest)
         .map_err(|e| Error::io(dir.join("skin.obj"), e))?;
