@@ -3,10 +3,13 @@
 //! `skin.pc2` and `skin.mdd`, and `skin.usda` with the mesh's points as time samples and the
 //! saliva layer's front faces with their state (`broken`, `moisture`) as per-face primvars.
 //!
-//! `export.json` says what was written (counts, seconds). Read from the run's directory
-//! (`frames.pvd` and the frames it lists), so it works on a finished run, on an interrupted
-//! one (every listed frame is complete), and again later (`sticky-lips export`). Positions
-//! are `f32` in the user's units and axes, the same values in every file.
+//! `export.json` says what was written (counts, seconds). [`export`] reads the run's
+//! directory (`frames.pvd` and the frames it lists), so it works on a finished run, on an
+//! interrupted one (every listed frame is complete), and again later (`sticky-lips export`).
+//! A run gathers the same files while it records its frames ([`Recorder`]), so that its own
+//! export reads nothing back (on the paper's scene, 101 frames of 1 MB each: 0.38 s of
+//! reading saved); the bytes are the same. Positions are `f32` in the user's units and axes,
+//! the same values in every file.
 
 use crate::error::{Error, Location, Result};
 use crate::io::cache::{mdd_bytes, pc2_bytes, usda_text, UsdLayer, UsdMesh};
