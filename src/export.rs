@@ -163,8 +163,9 @@ struct Frames {
     /// The saliva layer: the model quads whose element is a saliva element (from the first
     /// frame's `saliva_broken`; none if it has none).
     saliva_quads: Vec<usize>,
-    /// In each frame: the model surface's vertices, and each saliva quad's `broken` and
-    /// `moisture`.
+    /// The model surface's vertices that the saliva quads use (increasing).
+    saliva_vertices: Vec<usize>,
+    /// In each frame: those vertices, and each saliva quad's `broken` and `moisture`.
     saliva_pts: Vec<Vec<[f32; 3]>>,
     broken: Vec<Vec<f32>>,
     moisture: Vec<Vec<f32>>,
@@ -175,6 +176,7 @@ impl Frames {
         Frames {
             skin: Vec::with_capacity(capacity),
             saliva_quads: Vec::new(),
+            saliva_vertices: Vec::new(),
             saliva_pts: Vec::with_capacity(capacity),
             broken: Vec::new(),
             moisture: Vec::new(),
@@ -201,6 +203,12 @@ impl Frames {
                 self.saliva_quads = (0..skin.model.quads.len().min(b.len()))
                     .filter(|&q| b[q] >= 0.0)
                     .collect();
+                let used: std::collections::BTreeSet<usize> = self
+                    .saliva_quads
+                    .iter()
+                    .flat_map(|&q| skin.model.quads[q].iter().map(|&v| v as usize))
+                    .collect();
+                self.saliva_vertices = used.into_iter().collect();
             }
         }
         if !self.saliva_quads.is_empty() {
@@ -218,11 +226,12 @@ impl Frames {
                     .collect(),
             );
             self.saliva_pts.push(
-                skin.model
-                    .vertices
+                self.saliva_vertices
                     .iter()
-                    .zip(u)
-                    .map(|(x, d)| to32(fr.to_user([x[0] + d[0], x[1] + d[1], x[2] + d[2]])))
+                    .map(|&v| {
+                        let (x, d) = (skin.model.vertices[v], u[v]);
+                        to32(fr.to_user([x[0] + d[0], x[1] + d[1], x[2] + d[2]]))
+                    })
                     .collect(),
             );
         }
@@ -371,16 +380,22 @@ fn read_displacement(skin: &Skin, path: &Path, need: usize) -> Result<Vec<[f64; 
 fn usda(skin: &Skin, rest32: &[[f32; 3]], frames: Frames, times: &[f64]) -> String {
     let fr = &skin.frame;
     let faces: &[Vec<u32>] = &skin.surface.faces;
+    // the saliva mesh holds only the vertices its faces use, renumbered in order
+    let local = |v: u32| {
+        frames
+            .saliva_vertices
+            .binary_search(&(v as usize))
+            .expect("a saliva quad's vertex is listed") as u32
+    };
     let saliva_faces: Vec<Vec<u32>> = frames
         .saliva_quads
         .iter()
-        .map(|&q| skin.model.quads[q].to_vec())
+        .map(|&q| skin.model.quads[q].iter().map(|&v| local(v)).collect())
         .collect();
-    let model_rest: Vec<[f32; 3]> = skin
-        .model
-        .vertices
+    let model_rest: Vec<[f32; 3]> = frames
+        .saliva_vertices
         .iter()
-        .map(|&p| to32(fr.to_user(p)))
+        .map(|&v| to32(fr.to_user(skin.model.vertices[v])))
         .collect();
     let uv32: Option<Vec<[f32; 2]>> = skin
         .surface
