@@ -259,3 +259,85 @@ fn each_step_is_checked_against_its_own_limit() {
     );
     assert!(check_time_step(&slabs(1.1 * tissue, 0.05, 64, 1e6, 0.0), &report, true).is_ok());
 }
+
+/// A subcycled step that diverges, in its slow pass or in its substeps (which run side by
+/// side), stops with the step, the time and the element or node, and leaves the state (both
+/// displacements and the saliva layer's) bit for bit as it was before that step. The
+/// slabs' tissue allows 8.5 times the whole model's critical step: with 2 substeps of a step
+/// of 4 times it the substeps are unstable and the slow pass is not; with 16 substeps of a
+/// step of 12 times it the slow pass is unstable and the substeps are not.
+#[test]
+fn a_diverging_subcycled_step_leaves_the_state_as_it_was() {
+    let (whole, tissue) = critical_steps(&slabs(1e-5, 0.5, 1, 0.1, 2.0));
+    assert!(
+        tissue / whole > 8.0 && tissue / whole < 9.0,
+        "{}",
+        tissue / whole
+    );
+    for (factor, k) in [(4.0, 2), (12.0, 16)] {
+        let dt = factor * whole;
+        let p = slabs(dt, 0.5, k, 0.1, 2.0);
+        let mut sim = Simulation::<f64>::new(&p).unwrap();
+        let err = loop {
+            let before = sim.checkpoint_state();
+            match sim.step() {
+                Ok(()) => assert!(
+                    !sim.is_finished(),
+                    "{factor} x, {k} substeps: no divergence"
+                ),
+                Err(e) => {
+                    // NaN != NaN: the states compared as their printed bits
+                    assert!(
+                        format!("{:?}", sim.checkpoint_state()) == format!("{before:?}"),
+                        "{factor} x, {k} substeps: the state changed by the failed step"
+                    );
+                    break (e, before.step);
+                }
+            }
+        };
+        match err.0 {
+            sticky_lips::Error::Diverged {
+                step,
+                time,
+                element,
+                node,
+                ..
+            } => {
+                assert_eq!(step, err.1);
+                let t0 = step as f64 * dt;
+                assert!(time >= t0 && time < t0 + dt, "t = {time} in step {step}");
+                assert!(element.is_some() != node.is_some());
+                eprintln!("{factor} x, {k} substeps: step {step}, t = {time:e}, element {element:?}, node {node:?}");
+            }
+            e => panic!("{factor} x, {k} substeps: {e}"),
+        }
+    }
+    // a node that turns non-finite in the pass over every node while the substeps have
+    // already advanced the saliva state beside it: a fast node (87, on the saliva layer's lower
+    // face; the substeps fail too) and a slow one away from the layer (37)
+    for bad in [87, 37] {
+        let p = slabs(1.5 * whole, 0.5, 2, 0.1, 2.0);
+        let mut sim = Simulation::<f64>::new(&p).unwrap();
+        for _ in 0..20 {
+            sim.step().unwrap();
+        }
+        let s = sim.checkpoint_state();
+        let mut u_prev = s.u_prev.clone();
+        u_prev[bad][0] = f64::NAN;
+        sim.set_state(&s.u, &u_prev);
+        let before = format!("{:?}", sim.checkpoint_state());
+        match sim.step() {
+            Err(sticky_lips::Error::Diverged {
+                step, time, node, ..
+            }) => {
+                assert_eq!((step, node), (20, Some(bad)));
+                assert_eq!(time, 20.0 * 1.5 * whole);
+            }
+            r => panic!("node {bad}: {r:?}"),
+        }
+        assert!(
+            format!("{:?}", sim.checkpoint_state()) == before,
+            "node {bad}: the state changed by the failed step"
+        );
+    }
+}

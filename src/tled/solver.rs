@@ -17,7 +17,7 @@ use crate::tled::node_update::{gather_all, node_update, CentralDifference};
 use crate::tled::precompute::Discretisation;
 use crate::tled::saliva_forces::{saliva_forces, SalivaState};
 use crate::tled::simd::SimdReal;
-use crate::tled::subcycle::Subcycling;
+use crate::tled::subcycle::{diverged, substeps, Subcycling};
 
 /// The solver's state after `step` iterations, every value as `f64` (exact for `f32`).
 #[derive(Clone, Debug, PartialEq)]
@@ -316,21 +316,9 @@ impl<T: SimdReal> Simulation<T> {
     fn step_subcycled_with(&mut self, sub: &mut Subcycling<T>) -> Result<()> {
         use crate::tled::node_update::node_update_listed;
         let s = self.step;
-        let (dt, k) = (self.dt, sub.k);
-        let h = dt / k as f64;
+        let dt = self.dt;
         let t = s as f64 * dt;
-        let diverged =
-            |step: usize, time: f64, element: Option<usize>, node: Option<usize>| Error::Diverged {
-                step,
-                time,
-                element,
-                node,
-                reason: match element {
-                    Some(_) => "element inverted or degenerate (det F <= 0 or not finite)".into(),
-                    None => "non-finite displacement".into(),
-                },
-            };
-        // 1. the slow nodes over the whole step, from the forces at t_n
+        // 1. the slow elements' forces at t_n
         if let Some(e) = element_forces(&sub.slow_el, &self.u, &mut sub.slow_f) {
             return Err(diverged(s, t, Some(sub.slow_ids[e] as usize), None));
         }
@@ -338,111 +326,98 @@ impl<T: SimdReal> Simulation<T> {
         if has_loads {
             self.assemble_external_at(t);
         }
+        // 2a. the interface nodes' u(t_n + dt) first, constraints applied: the substeps
+        // interpolate them (the same operations as the pass over every node in 2b)
         let r = has_loads.then_some(self.r_ext.as_slice());
-        // every node in one pass (the fast nodes' values, from the slow elements' forces
-        // alone, are not used: step 3 puts the substeps' back), straight into `u_next`
-        if let Some(n) = node_update(
+        if node_update_listed(
+            &sub.interface,
             &sub.slow_gather,
             &self.cd,
             &sub.slow_f,
             r,
             &self.u,
             &self.u_prev,
-            &mut self.u_next,
-        ) {
-            return Err(diverged(s, t, None, Some(n)));
-        }
-        apply_constraints_into(
-            &self.disc,
-            &self.reference,
-            &mut self.u_next,
-            t + dt,
-            true,
-            &mut self.prescribed_acc,
-        );
-        // the state at t_n of what the substeps change, to restore on divergence
-        for (i, &n) in sub.interface.iter().enumerate() {
-            sub.interface_start[i] = self.u[n as usize];
-        }
-        for (i, &n) in sub.fast_nodes.iter().enumerate() {
-            sub.fast_u_start[i] = self.u[n as usize];
-            sub.fast_u_prev_start[i] = self.u_prev[n as usize];
-        }
-        sub.saliva_start.copy_from(&self.saliva);
-        // 2. the fast nodes in k substeps, the interface interpolated linearly in time
-        let mut failure = None;
-        for j in 0..k {
-            let tj = t + j as f64 * h;
-            if j > 0 {
-                let w = T::from_f64(j as f64 / k as f64);
-                for (i, &n) in sub.interface.iter().enumerate() {
-                    let (a, b) = (sub.interface_start[i], self.u_next[n as usize]);
-                    self.u[n as usize] = [0, 1, 2].map(|c| a[c] + w * (b[c] - a[c]));
-                }
-            }
-            if let Some(e) = element_forces(&sub.fast_el, &self.u, &mut sub.fast_f) {
-                failure = Some(diverged(s, tj, Some(sub.fast_ids[e] as usize), None));
-                break;
-            }
-            saliva_forces(
-                &sub.fast_saliva,
-                &mut self.saliva,
-                &sub.fast_el,
-                &self.u,
-                &mut sub.fast_f,
-                tj,
-            );
-            if has_loads {
-                self.assemble_external_at(tj);
-            }
-            let r = has_loads.then_some(self.r_ext.as_slice());
-            if let Some(n) = node_update_listed(
-                &sub.fast_nodes,
-                &sub.fast_gather,
-                &sub.fast_cd,
-                &sub.fast_f,
+            &mut sub.interface_next,
+        )
+        .is_some()
+        {
+            // reported as the pass over every node reports it: its smallest bad node
+            let n = node_update(
+                &sub.slow_gather,
+                &self.cd,
+                &sub.slow_f,
                 r,
                 &self.u,
                 &self.u_prev,
-                &mut sub.fast_next,
-            ) {
-                failure = Some(diverged(s, tj, None, Some(n)));
-                break;
-            }
-            for (&n, v) in sub.fast_nodes.iter().zip(&sub.fast_next) {
-                self.u_prev[n as usize] = self.u[n as usize];
-                self.u[n as usize] = *v;
-            }
-            apply_plan_into(
-                &sub.fast_constraints,
-                &self.reference,
-                &mut self.u,
-                tj + h,
-                true,
-                &mut self.prescribed_acc,
+                &mut self.u_next,
             );
+            return Err(diverged(s, t, None, n));
         }
+        for (&n, v) in sub.interface.iter().zip(&sub.interface_next) {
+            sub.fast.interface_end[n as usize] = *v;
+        }
+        apply_plan_into(
+            &sub.interface_constraints,
+            &self.reference,
+            &mut sub.fast.interface_end,
+            t + dt,
+            true,
+            &mut sub.interface_acc,
+        );
+        // the substeps' own copy of the fast elements' nodes at t_n
         for (i, &n) in sub.interface.iter().enumerate() {
-            self.u[n as usize] = sub.interface_start[i];
+            sub.fast.interface_start[i] = self.u[n as usize];
+            sub.fast.u[n as usize] = self.u[n as usize];
         }
-        if let Some(e) = failure {
-            for (i, &n) in sub.fast_nodes.iter().enumerate() {
-                self.u[n as usize] = sub.fast_u_start[i];
-                self.u_prev[n as usize] = sub.fast_u_prev_start[i];
-            }
+        for &n in &sub.fast_nodes {
+            sub.fast.u[n as usize] = self.u[n as usize];
+            sub.fast.u_prev[n as usize] = self.u_prev[n as usize];
+        }
+        sub.saliva_start.copy_from(&self.saliva);
+        // 2b. every node's u(t_n + dt) from the slow forces (the fast nodes' values unused),
+        // beside the fast nodes' k substeps: they share nothing they write
+        let Simulation {
+            disc,
+            reference,
+            cd,
+            u,
+            u_prev,
+            u_next,
+            r_ext,
+            saliva,
+            prescribed_acc,
+            ..
+        } = self;
+        let Subcycling {
+            slow_gather,
+            slow_f,
+            ..
+        } = sub;
+        let (slow, fast) = rayon::join(
+            || {
+                let r = has_loads.then_some(r_ext.as_slice());
+                let bad = node_update(slow_gather, cd, slow_f, r, u, u_prev, u_next);
+                apply_constraints_into(disc, reference, u_next, t + dt, true, prescribed_acc);
+                bad
+            },
+            || substeps(&mut sub.fast, disc, reference, saliva, s, t, dt),
+        );
+        if let Some(n) = slow {
+            self.saliva.copy_from(&sub.saliva_start);
+            return Err(diverged(s, t, None, Some(n)));
+        }
+        if let Err(e) = fast {
             self.saliva.copy_from(&sub.saliva_start);
             return Err(e);
         }
-        // 3. the slow nodes to t_n + dt: the buffers rotate (u_prev <- u <- u_next) as in a
-        // single-rate step, then the fast nodes (already at t_n + dt) take back their own
-        // state: `u` from the old `u` (now `u_prev`), `u_prev` from the old `u_prev` (now
-        // `u_next`)
+        // 3. every node to t_n + dt: the buffers rotate (u_prev <- u <- u_next) as in a
+        // single-rate step, then the fast nodes take the substeps' state
         std::mem::swap(&mut self.u_prev, &mut self.u);
         std::mem::swap(&mut self.u, &mut self.u_next);
         for &n in &sub.fast_nodes {
             let n = n as usize;
-            self.u[n] = self.u_prev[n];
-            self.u_prev[n] = self.u_next[n];
+            self.u[n] = sub.fast.u[n];
+            self.u_prev[n] = sub.fast.u_prev[n];
         }
         self.step += 1;
         Ok(())
@@ -465,15 +440,7 @@ impl<T: SimdReal> Simulation<T> {
 
     /// `R = sum_g value(curve_g) r_g` into `r_ext`.
     fn fill_external(&mut self, value: impl Fn(&LoadCurve) -> f64) {
-        for r in self.r_ext.iter_mut() {
-            *r = [T::ZERO; 3];
-        }
-        for g in &self.disc.loads {
-            let c = value(&g.curve);
-            for &(dof, v) in &g.entries {
-                self.r_ext[dof as usize / 3][dof as usize % 3] += T::from_f64(v * c);
-            }
-        }
+        fill_loads_with(&self.disc, value, &mut self.r_ext);
     }
 
     /// The saliva elements' state after the last step.
@@ -541,6 +508,29 @@ pub fn load_value(curve: &LoadCurve, s: usize, dt: f64, niftysim_timing: bool) -
     }
     let (t, clamp) = constraint_time(s, dt, niftysim_timing);
     curve.value(t, clamp)
+}
+
+/// `R = sum_g value(curve_g) r_g` of `d`'s loads into `r`.
+fn fill_loads_with<T: Real>(
+    d: &Discretisation,
+    value: impl Fn(&LoadCurve) -> f64,
+    r: &mut [[T; 3]],
+) {
+    for x in r.iter_mut() {
+        *x = [T::ZERO; 3];
+    }
+    for g in &d.loads {
+        let c = value(&g.curve);
+        for &(dof, v) in &g.entries {
+            r[dof as usize / 3][dof as usize % 3] += T::from_f64(v * c);
+        }
+    }
+}
+
+/// The external forces of `d` at time `t` (s), curves clamped, into `r` (a subcycled run's
+/// substeps; NiftySim's timing is refused there).
+pub fn fill_loads<T: Real>(d: &Discretisation, t: f64, r: &mut [[T; 3]]) {
+    fill_loads_with(d, |curve| curve.value(t, true), r);
 }
 
 /// Sets every constrained DOF of `u` at time `t`: fixed DOFs to zero, prescribed DOFs to
