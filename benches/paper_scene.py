@@ -14,8 +14,12 @@ process on 2 threads:
               step 0.8 of min(tissue's critical step, 2 x the whole model's), substeps for
               the saliva)
   sub-f32     the same in f32
+  sub-f32-2frames  the same with a frame at the start and the end only (the scene's
+              [time] output_every raised; what recording 101 frames costs)
+  before      sub-f32 with another build (BEFORE=path/to/sticky-lips; left out without it)
 
-For each: the median process wall time, the median stepping time (summary.json), the
+For each: the median process wall time, the run's own wall time and stepping time
+(summary.json: from reading the scenario to the last frame, and the steps alone), the
 animation files' and preview's time (the run's own log), and against the reference's last
 run: the largest difference of a lip column's opening time (the zip front: the time its gap
 first exceeds the open threshold, interpolated linearly between the frames, 10 ms apart) and
@@ -24,6 +28,7 @@ of the final displacements (relative to the largest).
     .venv/bin/python benches/paper_scene.py            # 3 rounds
     ROUNDS=5 .venv/bin/python benches/paper_scene.py
     ONLY=sub-f64,sub-f32 REF_DIR=target/bench-paper-scene/reference_2 .venv/bin/python benches/paper_scene.py
+    BEFORE=../old/target/release/sticky-lips .venv/bin/python benches/paper_scene.py
 
 Needs the release build (cargo build --release) and numpy + meshio (the test command's .venv).
 """
@@ -49,17 +54,33 @@ CONFIGS = [
     ("auto-f32", ["--dt", "auto", "--precision", "f32"]),
     ("sub-f64", ["--dt", "auto", "--subcycles", "auto", "--precision", "f64"]),
     ("sub-f32", ["--dt", "auto", "--subcycles", "auto", "--precision", "f32"]),
+    ("sub-f32-2frames", ["--dt", "auto", "--subcycles", "auto", "--precision", "f32"]),
 ]
+BEFORE = os.environ.get("BEFORE")
+if BEFORE:
+    CONFIGS.append(("before", ["--dt", "auto", "--subcycles", "auto", "--precision", "f32"]))
 ONLY = os.environ.get("ONLY")  # e.g. ONLY=reference,sub-f32
 if ONLY:
     CONFIGS = [c for c in CONFIGS if c[0] in ONLY.split(",")]
 
 
+def two_frames_scene():
+    """The scene with a frame at the start and at the end only."""
+    path = os.path.join(OUT, "table1_2frames.toml")
+    text = open(SCENE).read()
+    assert "output_every = 1000\n" in text
+    with open(path, "w") as f:
+        f.write(text.replace("output_every = 1000\n", "output_every = 100000\n"))
+    return path
+
+
 def run(name, args, k):
     out = os.path.join(OUT, f"{name}_{k}")
+    scene = two_frames_scene() if name.endswith("2frames") else SCENE
+    binary = BEFORE if name == "before" else BIN
     t0 = time.perf_counter()
     p = subprocess.run(
-        [BIN, "run", SCENE, "--threads", "2", "--out", out] + args,
+        [binary, "run", scene, "--threads", "2", "--out", out] + args,
         capture_output=True, text=True, check=True,
     )
     wall = time.perf_counter() - t0
@@ -67,7 +88,8 @@ def run(name, args, k):
     log = p.stdout + p.stderr
     m = re.search(r"skin\.usda \(.*?; ([0-9.]+) s\) and preview.*?\(([0-9.]+) s\)", log)
     files, preview = (float(m.group(1)), float(m.group(2))) if m else (float("nan"),) * 2
-    return out, wall, s["stepping_time"], s["steps"], s["dt"], files, preview, s.get("subcycles", 1)
+    return (out, wall, s["stepping_time"], s["steps"], s["dt"], files, preview,
+            s.get("subcycles", 1), s["wall_time"])
 
 
 def opening_times(out):
@@ -105,17 +127,21 @@ def main():
     t_ref, u_ref = opening_times(ref), final_u(ref)
     big = float(np.abs(u_ref).max())
     print(f"paper scene ({SCENE}), {ROUNDS} rounds, 2 threads; medians")
-    print("| configuration | dt (s) | substeps | steps | wall (s) | stepping (s) | animation files (s) | preview (s) | zip front max diff (s) | final displacement max diff / largest |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("| configuration | dt (s) | substeps | steps | frames | process wall (s) | run (s) | stepping (s) | animation files (s) | preview (s) | zip front max diff (s) | final displacement max diff / largest |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name, _ in CONFIGS:
         r = res[name]
         out = r[-1][0]
+        frames = json.load(open(os.path.join(out, "summary.json")))["frames"]
+        med = lambda i: statistics.median(x[i] for x in r)
+        if frames < 3:  # no zip front to compare
+            print(f"| {name} | {r[-1][4]:.4g} | {r[-1][7]} | {r[-1][3]} | {frames} | {med(1):.2f} | {med(8):.2f} | {med(2):.2f} | {med(5):.2f} | {med(6):.2f} | - | - |")
+            continue
         t = opening_times(out)
         dz = max((abs(a - b) if a is not None and b is not None else float("inf"))
                  if (a is not None or b is not None) else 0.0 for a, b in zip(t, t_ref))
         du = float(np.abs(final_u(out) - u_ref).max()) / big
-        med = lambda i: statistics.median(x[i] for x in r)
-        print(f"| {name} | {r[-1][4]:.4g} | {r[-1][7]} | {r[-1][3]} | {med(1):.2f} | {med(2):.2f} | {med(5):.2f} | {med(6):.2f} | {dz:.3g} | {du:.3g} |")
+        print(f"| {name} | {r[-1][4]:.4g} | {r[-1][7]} | {r[-1][3]} | {frames} | {med(1):.2f} | {med(8):.2f} | {med(2):.2f} | {med(5):.2f} | {med(6):.2f} | {dz:.3g} | {du:.3g} |")
 
 
 if __name__ == "__main__":
