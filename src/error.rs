@@ -103,14 +103,15 @@ impl fmt::Display for Error {
                 f,
                 "time step {dt:.4e} s exceeds the critical time step {critical:.4e} s (2/omega_max of M^-1 K); \
                  the limiting element is {element} (its own estimate {element_estimate:.4e} s). \
-                 Use a time step of at most {critical:.4e} s, or pass --force-dt to run anyway"
+                 Use a time step of at most {critical:.4e} s, or force the run (`--force-dt` on \
+                 the command line, `force_dt=True` from Python)"
             ),
             Error::UnstableLargeStep { dt, critical, subcycles } => write!(
                 f,
                 "the large step {dt:.4e} s of a run with {subcycles} substeps exceeds the \
                  critical time step of the tissue {critical:.4e} s (the model without the \
-                 saliva's stiffness); use a step of at most {critical:.4e} s, or pass \
-                 --force-dt to run anyway"
+                 saliva's stiffness); use a step of at most {critical:.4e} s, or force the run \
+                 (`--force-dt` on the command line, `force_dt=True` from Python)"
             ),
             Error::Diverged { step, time, element, node, reason } => {
                 write!(f, "run diverged at step {step} (t = {time:.6e} s)")?;
