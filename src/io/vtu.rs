@@ -261,6 +261,49 @@ fn write_data_array(w: &mut dyn Write, indent: &str, a: &DataArray) -> io::Resul
 /// nothing is written when the frame is inconsistent).
 pub fn write_vtu_to(w: &mut dyn Write, frame: &VtuFrame) -> io::Result<()> {
     validate(frame)?;
+    write_vtu_parts(w, frame, &cells_xml(frame.hexahedra)?)
+}
+
+/// The `<Cells>` element of a .vtu document of `hexahedra` (connectivity, offsets, types):
+/// the same bytes in every frame of a run, so that a run encodes it once
+/// ([`write_vtu_with_cells`]).
+pub fn cells_xml(hexahedra: &[[u32; 8]]) -> io::Result<Vec<u8>> {
+    let mut out = Vec::new();
+    let w: &mut dyn Write = &mut out;
+    let nc = hexahedra.len();
+    w.write_all(b"      <Cells>\n")?;
+    open_array(w, "        ", "Int64", "connectivity", 1, "")?;
+    write_block(w, nc * 8, 8, |s, e, buf| {
+        for k in s..e {
+            buf.extend_from_slice(&i64::from(hexahedra[k / 8][k % 8]).to_le_bytes());
+        }
+    })?;
+    close_array(w, "        ")?;
+    open_array(w, "        ", "Int64", "offsets", 1, "")?;
+    write_block(w, nc, 8, |s, e, buf| {
+        for k in s..e {
+            buf.extend_from_slice(&(8 * (k as i64 + 1)).to_le_bytes());
+        }
+    })?;
+    close_array(w, "        ")?;
+    open_array(w, "        ", "UInt8", "types", 1, "")?;
+    write_block(w, nc, 1, |s, e, buf| {
+        buf.resize(buf.len() + (e - s), VTK_HEXAHEDRON)
+    })?;
+    close_array(w, "        ")?;
+    w.write_all(b"      </Cells>\n")?;
+    Ok(out)
+}
+
+/// Atomically write `frame` to `path` with its `<Cells>` element `cells` encoded beforehand
+/// ([`cells_xml`] of `frame.hexahedra`): the bytes of [`write_vtu`].
+pub fn write_vtu_with_cells(path: &Path, frame: &VtuFrame, cells: &[u8]) -> io::Result<()> {
+    validate(frame)?;
+    write_atomic_with(path, |w| write_vtu_parts(w, frame, cells))
+}
+
+/// The document of a validated `frame` with its `<Cells>` element `cells`.
+fn write_vtu_parts(w: &mut dyn Write, frame: &VtuFrame, cells: &[u8]) -> io::Result<()> {
     let np = frame.points.len();
     let nc = frame.hexahedra.len();
 
@@ -312,30 +355,7 @@ pub fn write_vtu_to(w: &mut dyn Write, frame: &VtuFrame) -> io::Result<()> {
     })?;
     close_array(w, "        ")?;
     w.write_all(b"      </Points>\n")?;
-
-    w.write_all(b"      <Cells>\n")?;
-    let hexes = frame.hexahedra;
-    open_array(w, "        ", "Int64", "connectivity", 1, "")?;
-    write_block(w, nc * 8, 8, |s, e, buf| {
-        for k in s..e {
-            buf.extend_from_slice(&i64::from(hexes[k / 8][k % 8]).to_le_bytes());
-        }
-    })?;
-    close_array(w, "        ")?;
-    open_array(w, "        ", "Int64", "offsets", 1, "")?;
-    write_block(w, nc, 8, |s, e, buf| {
-        for k in s..e {
-            buf.extend_from_slice(&(8 * (k as i64 + 1)).to_le_bytes());
-        }
-    })?;
-    close_array(w, "        ")?;
-    open_array(w, "        ", "UInt8", "types", 1, "")?;
-    write_block(w, nc, 1, |s, e, buf| {
-        buf.resize(buf.len() + (e - s), VTK_HEXAHEDRON)
-    })?;
-    close_array(w, "        ")?;
-    w.write_all(b"      </Cells>\n")?;
-
+    w.write_all(cells)?;
     w.write_all(b"    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n")?;
     Ok(())
 }
@@ -694,6 +714,42 @@ mod tests {
         }
         assert!(base64_decode("abc").is_none());
         assert!(base64_decode("ab$=").is_none());
+    }
+
+    /// A run's frames are written with their `<Cells>` element encoded once: the bytes of a
+    /// file written in one go; a frame whose cells do not fit its points is still refused.
+    #[test]
+    fn cells_encoded_once_give_the_same_file() {
+        let (pts, hexes) = two_hex();
+        let disp: Vec<f64> = (0..pts.len() * 3).map(|i| i as f64 * 1e-4).collect();
+        let frame = VtuFrame {
+            points: &pts,
+            hexahedra: &hexes,
+            point_data: vec![DataArray::F64 {
+                name: "displacement",
+                components: 3,
+                data: &disp,
+            }],
+            cell_data: vec![],
+            time: Some(0.25),
+        };
+        let dir = std::env::temp_dir().join(format!("vtu-cells-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (a, b) = (dir.join("a.vtu"), dir.join("b.vtu"));
+        write_vtu(&a, &frame).unwrap();
+        let cells = cells_xml(&hexes).unwrap();
+        write_vtu_with_cells(&b, &frame, &cells).unwrap();
+        assert!(std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap());
+        let short = &pts[..pts.len() - 1];
+        let bad = VtuFrame {
+            points: short,
+            point_data: vec![],
+            ..frame
+        };
+        let e = write_vtu_with_cells(&dir.join("c.vtu"), &bad, &cells).unwrap_err();
+        assert_eq!(e.kind(), io::ErrorKind::InvalidInput, "{e}");
+        assert!(!dir.join("c.vtu").exists());
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]
