@@ -240,7 +240,11 @@ pub fn substeps<T: crate::tled::simd::SimdReal>(
             let w = T::from_f64(j as f64 / k as f64);
             for (i, &n) in f.interface.iter().enumerate() {
                 let (a, b) = (f.interface_start[i], f.interface_end[n as usize]);
-                f.u[n as usize] = [0, 1, 2].map(|c| a[c] + w * (b[c] - a[c]));
+                f.u[n as usize] = [
+                    a[0] + w * (b[0] - a[0]),
+                    a[1] + w * (b[1] - a[1]),
+                    a[2] + w * (b[2] - a[2]),
+                ];
             }
         }
         if let Some(e) = element_forces(&f.el, &f.u, &mut f.f) {
