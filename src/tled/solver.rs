@@ -239,7 +239,7 @@ impl<T: SimdReal> Simulation<T> {
 
     /// Substeps per step (1: single rate).
     pub fn subcycles(&self) -> usize {
-        self.sub.as_ref().map_or(1, |s| s.k)
+        self.sub.as_ref().map_or(1, |s| s.k())
     }
 
     /// Advances one iteration. On divergence the state is left as it was before the step.
@@ -330,7 +330,7 @@ impl<T: SimdReal> Simulation<T> {
         // interpolate them (the same operations as the pass over every node in 2b)
         let r = has_loads.then_some(self.r_ext.as_slice());
         if node_update_listed(
-            &sub.interface,
+            &sub.fast.interface,
             &sub.slow_gather,
             &self.cd,
             &sub.slow_f,
@@ -353,7 +353,7 @@ impl<T: SimdReal> Simulation<T> {
             );
             return Err(diverged(s, t, None, n));
         }
-        for (&n, v) in sub.interface.iter().zip(&sub.interface_next) {
+        for (&n, v) in sub.fast.interface.iter().zip(&sub.interface_next) {
             sub.fast.interface_end[n as usize] = *v;
         }
         apply_plan_into(
@@ -365,11 +365,11 @@ impl<T: SimdReal> Simulation<T> {
             &mut sub.interface_acc,
         );
         // the substeps' own copy of the fast elements' nodes at t_n
-        for (i, &n) in sub.interface.iter().enumerate() {
+        for (i, &n) in sub.fast.interface.iter().enumerate() {
             sub.fast.interface_start[i] = self.u[n as usize];
             sub.fast.u[n as usize] = self.u[n as usize];
         }
-        for &n in &sub.fast_nodes {
+        for &n in &sub.fast.nodes {
             sub.fast.u[n as usize] = self.u[n as usize];
             sub.fast.u_prev[n as usize] = self.u_prev[n as usize];
         }
@@ -414,7 +414,7 @@ impl<T: SimdReal> Simulation<T> {
         // single-rate step, then the fast nodes take the substeps' state
         std::mem::swap(&mut self.u_prev, &mut self.u);
         std::mem::swap(&mut self.u, &mut self.u_next);
-        for &n in &sub.fast_nodes {
+        for &n in &sub.fast.nodes {
             let n = n as usize;
             self.u[n] = sub.fast.u[n];
             self.u_prev[n] = sub.fast.u_prev[n];

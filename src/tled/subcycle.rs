@@ -52,13 +52,7 @@ pub use crate::problem::MAX_SUBCYCLES;
 /// The two partitions of a subcycled run, in the stepping precision.
 #[derive(Clone, Debug)]
 pub struct Subcycling<T> {
-    /// Substeps per step (`k >= 2`).
-    pub k: usize,
-    /// Node lists (increasing).
-    pub fast_nodes: Vec<u32>,
-    pub slow_nodes: Vec<u32>,
-    /// Slow nodes that a fast element touches (increasing), interpolated during substeps.
-    pub interface: Vec<u32>,
+    /// Per node: a node of a saliva element (the substeps' own nodes are `fast.nodes`).
     pub is_fast: Vec<bool>,
     /// Elements touching a slow node (global indices, increasing) and their arrays.
     pub slow_ids: Vec<u32>,
@@ -81,8 +75,10 @@ pub struct Subcycling<T> {
 /// The fast partition: its elements and nodes, and the substeps' own copy of the state.
 #[derive(Clone, Debug)]
 pub struct FastPart<T> {
+    /// Substeps per step (`k >= 2`).
     pub k: usize,
-    /// Fast nodes and interface nodes (as in [`Subcycling`]).
+    /// The fast nodes, and the slow nodes that a fast element touches (the interface,
+    /// interpolated during the substeps); both increasing.
     pub nodes: Vec<u32>,
     pub interface: Vec<u32>,
     /// Elements touching a fast node (global indices, increasing) and their arrays; the
@@ -128,7 +124,6 @@ impl<T: Real> Subcycling<T> {
             }
         }
         let fast_nodes: Vec<u32> = (0..nn as u32).filter(|&n| is_fast[n as usize]).collect();
-        let slow_nodes: Vec<u32> = (0..nn as u32).filter(|&n| !is_fast[n as usize]).collect();
         let fast_ids = elements_touching(&d.conn, |n| is_fast[n]);
         let slow_ids = elements_touching(&d.conn, |n| !is_fast[n]);
         let mut on_interface = vec![false; nn];
@@ -159,8 +154,8 @@ impl<T: Real> Subcycling<T> {
         let (nf, ni) = (fast_nodes.len(), interface.len());
         let fast = FastPart {
             k,
-            nodes: fast_nodes.clone(),
-            interface: interface.clone(),
+            nodes: fast_nodes,
+            interface,
             constraints: d.constraints.restricted_to(&is_fast),
             cd: CentralDifference::new(h, alpha, &d.mass),
             f: vec![[[T::ZERO; 3]; 8]; fast_el.len()],
@@ -177,15 +172,11 @@ impl<T: Real> Subcycling<T> {
             saliva: fast_saliva,
         };
         Subcycling {
-            k,
             interface_constraints: d.constraints.restricted_to(&on_interface),
             interface_next: vec![[T::ZERO; 3]; ni],
             interface_acc: Vec::new(),
             slow_f: vec![[[T::ZERO; 3]; 8]; slow_el.len()],
             saliva_start: SalivaState::new(&fast.saliva),
-            fast_nodes,
-            slow_nodes,
-            interface,
             is_fast,
             slow_ids,
             slow_el,
@@ -194,9 +185,14 @@ impl<T: Real> Subcycling<T> {
         }
     }
 
+    /// Substeps per step.
+    pub fn k(&self) -> usize {
+        self.fast.k
+    }
+
     /// The substep `dt / k` (s).
     pub fn substep(&self, dt: f64) -> f64 {
-        dt / self.k as f64
+        dt / self.fast.k as f64
     }
 }
 
