@@ -310,7 +310,8 @@ impl Recorder {
         u: &[[f64; 3]],
         saliva: Option<&crate::io::output::SalivaFrame>,
     ) {
-        let cells = saliva.map(|s| {
+        // laid out as the frame files' cell arrays, which `read_frames` reads
+        if let Some(s) = saliva {
             self.broken.clear();
             self.broken.resize(self.num_elements, -1.0);
             self.moisture.clear();
@@ -319,11 +320,12 @@ impl Recorder {
                 self.broken[e as usize] = if s.broken[k] { 1.0 } else { 0.0 };
                 self.moisture[e as usize] = s.moisture[k];
             }
-        });
-        let (b, m) = match cells {
-            Some(()) => (Some(self.broken.as_slice()), Some(self.moisture.as_slice())),
-            None => (None, None),
-        };
+        }
+        let has = saliva.is_some();
+        let (b, m) = (
+            has.then_some(&self.broken[..]),
+            has.then_some(&self.moisture[..]),
+        );
         self.frames.push(skin, t, u, b, m);
         self.times.push(t);
     }
