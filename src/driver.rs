@@ -626,6 +626,26 @@ pub fn equilibrium(
 mod tests {
     use super::*;
 
+    /// The MakeHuman face at a quarter of the resolution with Table 1's materials and
+    /// stickiness, the jaw opening by 0.15 rad over `jaw_duration` s; `total` s simulated, a
+    /// frame every `interval` s, at `dt = "auto"`. `path`: the scenario's name.
+    fn coarse_face(
+        path: &std::path::Path,
+        jaw_duration: f64,
+        total: f64,
+        interval: f64,
+    ) -> Problem {
+        let text = format!(
+            "[mesh]\ngenerator = \"face\"\n[mesh.face]\nresolution = 0.25\n\
+            [[materials]]\nname = \"tissue\"\nelements = \"tissue\"\nmu = 800.0\nK = 7000.0\ndensity = 1050.0\n\
+            [[materials]]\nname = \"saliva\"\nelements = \"saliva\"\nmu = 7700.0\nK = 191000.0\ndensity = 1050.0\n\
+            [[saliva]]\nmaterial = \"saliva\"\ncritical_moisture = 100.0\ninitial_moisture = 100.0\nk_glue = 0.1\n\
+            [[fix]]\nnodes = \"skull\"\n[jaw]\nangle = 0.15\nduration = {jaw_duration:?}\n\
+            [time]\ndt = \"auto\"\ntotal = {total:?}\noutput_interval = {interval:?}\n"
+        );
+        crate::io::scenario::parse(&text, path).unwrap().problem
+    }
+
     /// A face run cancelled after its second frame (as SIGINT does on the command line) ends
     /// with `Interrupted` and leaves what the README promises: `summary.json` saying where it
     /// stopped and its complete frames, from which `export` then writes the animation files
@@ -637,15 +657,7 @@ mod tests {
             std::env::temp_dir().join(format!("sticky-lips-cancel-face-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
-        let text = "[mesh]\ngenerator = \"face\"\n[mesh.face]\nresolution = 0.25\n\
-            [[materials]]\nname = \"tissue\"\nelements = \"tissue\"\nmu = 800.0\nK = 7000.0\ndensity = 1050.0\n\
-            [[materials]]\nname = \"saliva\"\nelements = \"saliva\"\nmu = 7700.0\nK = 191000.0\ndensity = 1050.0\n\
-            [[saliva]]\nmaterial = \"saliva\"\ncritical_moisture = 100.0\ninitial_moisture = 100.0\nk_glue = 0.1\n\
-            [[fix]]\nnodes = \"skull\"\n[jaw]\nangle = 0.15\nduration = 0.5\n\
-            [time]\ndt = \"auto\"\ntotal = 10.0\noutput_interval = 0.004\n";
-        let p = crate::io::scenario::parse(text, &dir.join("long.toml"))
-            .unwrap()
-            .problem;
+        let p = coarse_face(&dir.join("long.toml"), 0.5, 10.0, 0.004);
         let mut opts = RunOptions::new(dir.join("run"), Precision::F64, 2);
         let cancel = opts.cancel.clone();
         opts.progress = Some(OnProgress::new(move |u: &ProgressUpdate| {
@@ -680,15 +692,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("sticky-lips-recorder-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
-        let text = "[mesh]\ngenerator = \"face\"\n[mesh.face]\nresolution = 0.25\n\
-            [[materials]]\nname = \"tissue\"\nelements = \"tissue\"\nmu = 800.0\nK = 7000.0\ndensity = 1050.0\n\
-            [[materials]]\nname = \"saliva\"\nelements = \"saliva\"\nmu = 7700.0\nK = 191000.0\ndensity = 1050.0\n\
-            [[saliva]]\nmaterial = \"saliva\"\ncritical_moisture = 100.0\ninitial_moisture = 100.0\nk_glue = 0.1\n\
-            [[fix]]\nnodes = \"skull\"\n[jaw]\nangle = 0.15\nduration = 0.2\n\
-            [time]\ndt = \"auto\"\ntotal = 0.3\noutput_interval = 0.01\n";
-        let p = crate::io::scenario::parse(text, &dir.join("open.toml"))
-            .unwrap()
-            .problem;
+        let p = coarse_face(&dir.join("open.toml"), 0.2, 0.3, 0.01);
         let out = dir.join("run");
         let s = run(&p, &RunOptions::new(&out, Precision::F64, 2)).unwrap();
         let gathered = s.export.expect("a face run exports");

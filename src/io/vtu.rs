@@ -716,23 +716,33 @@ mod tests {
         assert!(base64_decode("ab$=").is_none());
     }
 
+    /// A frame of `pts` and `hexes` with point data `displacement` (3 components) only.
+    fn displacement_frame<'a>(
+        pts: &'a [[f64; 3]],
+        hexes: &'a [[u32; 8]],
+        disp: &'a [f64],
+        time: Option<f64>,
+    ) -> VtuFrame<'a> {
+        VtuFrame {
+            points: pts,
+            hexahedra: hexes,
+            point_data: vec![DataArray::F64 {
+                name: "displacement",
+                components: 3,
+                data: disp,
+            }],
+            cell_data: vec![],
+            time,
+        }
+    }
+
     /// A run's frames are written with their `<Cells>` element encoded once: the bytes of a
     /// file written in one go; a frame whose cells do not fit its points is still refused.
     #[test]
     fn cells_encoded_once_give_the_same_file() {
         let (pts, hexes) = two_hex();
         let disp: Vec<f64> = (0..pts.len() * 3).map(|i| i as f64 * 1e-4).collect();
-        let frame = VtuFrame {
-            points: &pts,
-            hexahedra: &hexes,
-            point_data: vec![DataArray::F64 {
-                name: "displacement",
-                components: 3,
-                data: &disp,
-            }],
-            cell_data: vec![],
-            time: Some(0.25),
-        };
+        let frame = displacement_frame(&pts, &hexes, &disp, Some(0.25));
         let dir = std::env::temp_dir().join(format!("vtu-cells-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let (a, b) = (dir.join("a.vtu"), dir.join("b.vtu"));
@@ -758,17 +768,7 @@ mod tests {
         let disp: Vec<f64> = (0..pts.len() * 3)
             .map(|i| (i as f64 + 0.1).ln() * 1e-3)
             .collect();
-        let frame = VtuFrame {
-            points: &pts,
-            hexahedra: &hexes,
-            point_data: vec![DataArray::F64 {
-                name: "displacement",
-                components: 3,
-                data: &disp,
-            }],
-            cell_data: vec![],
-            time: None,
-        };
+        let frame = displacement_frame(&pts, &hexes, &disp, None);
         let dir = std::env::temp_dir().join(format!("vtu-read-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("f.vtu");
